@@ -1,0 +1,87 @@
+"""Condensed surface compliance of the gel: columns of K^-1 at contact-candidate dofs, computed only when needed.
+
+The gel is linear and only the contact is not, so the surface displacement of the candidate points is exactly
+u = C f, with C the inverse stiffness restricted to those dofs (a Schur complement, as boundary-element contact
+codes use). A column costs one back-substitution with the stored factorization; columns are computed the first
+time a point enters contact and reused by every later Newton iteration, increment and load path on that mesh.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fem.elasticity import ElasticModel
+from fem.linear_solver import SpdFactorization
+
+__all__ = ["SurfaceCompliance"]
+
+
+class SurfaceCompliance:
+    """Lazily built compliance C [mm/N] between the dofs of candidate top-surface points.
+
+    Parameters
+    ----------
+    model : ElasticModel
+    factorization : SpdFactorization of ``model.stiffness_free``
+    points : (n,) indices into ``model.top`` of the candidate points
+    components : dof components carried per point, (0, 1, 2) for x, y, z or (2,) for normal-only contact
+    """
+
+    def __init__(self, model: ElasticModel, factorization: SpdFactorization, points: np.ndarray,
+                 components: tuple[int, ...] = (0, 1, 2)):
+        self.model = model
+        self.factorization = factorization
+        self.points = np.asarray(points)
+        self.components = tuple(components)
+        n_comp = len(self.components)
+        free_position = np.full(model.n_dofs, -1)
+        free_position[model.free_dofs] = np.arange(model.free_dofs.size)
+        dofs = model.top.dofs[self.points][:, self.components]          # (n, n_comp) full dof ids
+        self.rows = free_position[dofs].ravel()                         # (n * n_comp,) free-vector positions
+        if np.any(self.rows < 0):
+            raise ValueError("a contact candidate point lies on the fixed base")
+        self.size = self.rows.size
+        self._slot = np.full(self.size, -1)                             # column -> storage slot
+        self._store = np.empty((self.size, 0))
+        self._count = 0
+        self.solves = 0
+
+    def unknown_index(self, local_points: np.ndarray) -> np.ndarray:
+        """Flat indices (len(points) * n_comp,) of the dofs of the given local candidate points."""
+        n_comp = len(self.components)
+        return (np.asarray(local_points)[:, None] * n_comp + np.arange(n_comp)).ravel()
+
+    def ensure(self, columns: np.ndarray) -> None:
+        """Compute the missing columns among ``columns`` (flat unknown indices) in one multi-RHS solve."""
+        columns = np.asarray(columns)
+        missing = columns[self._slot[columns] < 0]
+        if missing.size == 0:
+            return
+        needed = self._count + missing.size
+        if needed > self._store.shape[1]:
+            grown = np.empty((self.size, max(needed, 2 * self._store.shape[1], 64)))
+            grown[:, :self._count] = self._store[:, :self._count]
+            self._store = grown
+        rhs = np.zeros((self.factorization.size, missing.size))
+        rhs[self.rows[missing], np.arange(missing.size)] = 1.0
+        solution = self.factorization.solve(rhs)
+        self._store[:, self._count:needed] = solution[self.rows]
+        self._slot[missing] = np.arange(self._count, needed)
+        self._count = needed
+        self.solves += missing.size
+
+    def block(self, row_index: np.ndarray | slice, columns: np.ndarray) -> np.ndarray:
+        """C[rows, columns] (computing missing columns first); rows default to all candidate dofs."""
+        self.ensure(columns)
+        return self._store[row_index, :][:, self._slot[columns]]
+
+    def displacement(self, columns: np.ndarray, forces: np.ndarray) -> np.ndarray:
+        """Displacement at every candidate dof [mm] for nodal forces [N] on the given columns."""
+        if len(columns) == 0:
+            return np.zeros(self.size)
+        self.ensure(columns)
+        return self._store[:, self._slot[columns]] @ forces
+
+    @property
+    def computed_columns(self) -> int:
+        return self._count

@@ -1,0 +1,299 @@
+"""Frictional contact of a rigid body with a linear-elastic gel along a quasi-static load path (scene -> result)."""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from contact._newton import OPEN, SLIP, STICK, BodyControl, ContactNotConverged, ContactState, solve_increment
+from contact.compliance import SurfaceCompliance
+from contact.scene import LoadKind, Scene
+from fem.elasticity import ElasticModel, assemble_elastic_model
+from fem.linear_solver import SpdFactorization
+from fem.mesh import BlockMeshSpec, graded_block_mesh, mesh_quality
+
+__all__ = ["Increment", "ContactResult", "PathNotCompleted", "prepare", "solve_scene", "OPEN", "STICK", "SLIP"]
+
+
+@dataclass
+class Increment:
+    """Scalars and fields of one converged increment (mm, N, MPa, N mm, rad, s)."""
+
+    load_kind: str
+    normal_force: float
+    tangential_force: list[float]
+    torque: float
+    depth: float
+    shift: list[float]
+    angle: float
+    contact_area: float
+    stick_area: float
+    contact_radius: float
+    stick_radius: float
+    stick_ratio: float
+    max_pressure: float
+    iterations: int
+    residual: float
+    seconds: float
+    # fields (not written to result.json): per candidate point and per base point
+    status: np.ndarray = field(repr=False, default=None)
+    pressure: np.ndarray = field(repr=False, default=None)
+    traction: np.ndarray = field(repr=False, default=None)
+    base_pressure: np.ndarray = field(repr=False, default=None)
+    base_traction: np.ndarray = field(repr=False, default=None)
+    displacement_full: np.ndarray = field(repr=False, default=None)
+
+    SCALARS = ("load_kind", "normal_force", "tangential_force", "torque", "depth", "shift", "angle", "contact_area",
+               "stick_area", "contact_radius", "stick_radius", "stick_ratio", "max_pressure", "iterations",
+               "residual", "seconds")
+
+    def summary(self) -> dict:
+        return {name: getattr(self, name) for name in self.SCALARS}
+
+
+@dataclass
+class ContactResult:
+    """Everything a solve produced: mesh facts, timings, what was left out, and the increments."""
+
+    scene: Scene
+    model: ElasticModel
+    candidates: np.ndarray            # indices into model.top of the contact-candidate points
+    increments: list[Increment] = field(default_factory=list)
+    timings: dict = field(default_factory=dict)
+    mesh_info: dict = field(default_factory=dict)
+    left_out: list[str] = field(default_factory=list)
+    error: str | None = None
+
+    @property
+    def candidate_positions(self) -> np.ndarray:
+        return self.model.top.positions[self.candidates]
+
+    @property
+    def candidate_areas(self) -> np.ndarray:
+        return self.model.top.areas[self.candidates]
+
+
+class PathNotCompleted(RuntimeError):
+    """A load increment failed; ``result`` keeps every increment converged before it."""
+
+    def __init__(self, message: str, result: ContactResult):
+        super().__init__(message)
+        self.result = result
+
+
+def _max_normal_load(scene: Scene) -> tuple[float | None, float | None]:
+    forces = [v for load in scene.loads if load.kind == LoadKind.PRESS and load.control == "force" for v in load.values]
+    depths = [v for load in scene.loads if load.kind == LoadKind.PRESS and load.control == "displacement"
+              for v in load.values]
+    return (max(forces) if forces else None), (max(depths) if depths else None)
+
+
+def estimated_contact_radius(scene: Scene) -> float:
+    """Half-space (Hertz) contact radius at the largest press of the path [mm]; for a plane, the gel half-diagonal."""
+    if scene.body.shape == "plane":
+        return 0.5 * math.hypot(scene.gel.width, scene.gel.depth)
+    force, depth = _max_normal_load(scene)
+    radius = scene.body.radius
+    from_force = (3.0 * force * radius / (4.0 * scene.material.effective_modulus)) ** (1 / 3) if force else 0.0
+    from_depth = math.sqrt(radius * depth) if depth else 0.0
+    return max(from_force, from_depth)
+
+
+@dataclass
+class Prepared:
+    """Mesh, assembled model and factorization of a scene: everything that does not depend on the load path."""
+
+    model: ElasticModel
+    factorization: SpdFactorization
+    timings: dict
+    mesh_info: dict
+    fine_radius: float
+
+
+def prepare(scene: Scene) -> Prepared:
+    """Mesh the gel, assemble K and factorize it once (reused by every increment)."""
+    timings = {}
+    start = time.perf_counter()
+    fine_radius = scene.mesh.fine_radius or (1.3 * estimated_contact_radius(scene) + 2.0 * scene.mesh.size_contact)
+    spec = BlockMeshSpec(width=scene.gel.width, depth=scene.gel.depth, thickness=scene.gel.thickness,
+                         size_contact=scene.mesh.size_contact * scene.mesh.order, size_far=scene.mesh.size_far,
+                         fine_radius=fine_radius, fine_center=tuple(scene.body.center), grading=scene.mesh.grading)
+    mesh = graded_block_mesh(spec)
+    timings["mesh"] = time.perf_counter() - start
+    start = time.perf_counter()
+    model = assemble_elastic_model(mesh, scene.material.E, scene.material.nu, scene.mesh.order)
+    timings["assembly"] = time.perf_counter() - start
+    start = time.perf_counter()
+    factorization = SpdFactorization(model.stiffness_free)
+    timings["factorization"] = time.perf_counter() - start
+    quality = mesh_quality(mesh.p, mesh.t)
+    mesh_info = {"nodes": int(mesh.p.shape[1]), "elements": int(mesh.t.shape[1]), "dofs": int(model.n_dofs),
+                 "free_dofs": int(model.free_dofs.size), "order": scene.mesh.order,
+                 "top_points": int(model.top.areas.size), "min_dihedral_deg": quality.min_dihedral_deg,
+                 "min_radius_ratio": quality.min_radius_ratio, "fine_radius": fine_radius,
+                 "solver_backend": factorization.backend}
+    return Prepared(model, factorization, timings, mesh_info, fine_radius)
+
+
+def _augmentation(areas: np.ndarray, effective_modulus: float) -> np.ndarray:
+    """Alart-Curnier parameter per point: stiffness 2 E* rho of a rigid disc with the point's area [N/mm]."""
+    return 2.0 * effective_modulus * np.sqrt(areas / np.pi)
+
+
+def _controls(scene: Scene):
+    """Yield (load kind, BodyControl, frictional?) per increment; coordinates keep their last control."""
+    normal = {"depth": None, "normal_force": None}
+    tangential = {"shift": (0.0, 0.0), "tangential_force": None}
+    twist = {"angle": 0.0, "torque": None}
+    friction_on = not scene.contact.frictionless_press
+    for load in scene.loads:
+        for value in load.values:
+            if load.kind == LoadKind.PRESS:
+                normal = {"depth": value, "normal_force": None} if load.control == "displacement" else \
+                    {"depth": None, "normal_force": value}
+            elif load.kind == LoadKind.SHEAR:
+                friction_on = True
+                unit = np.asarray(load.direction, float) / math.hypot(*load.direction)
+                vector = tuple(float(v) for v in unit * value)
+                tangential = {"shift": vector, "tangential_force": None} if load.control == "displacement" else \
+                    {"shift": None, "tangential_force": vector}
+            else:
+                friction_on = True
+                twist = {"angle": value, "torque": None} if load.control == "displacement" else \
+                    {"angle": None, "torque": value}
+            yield load.kind.value, BodyControl(**normal, **tangential, **twist), friction_on
+
+
+def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool = False) -> ContactResult:
+    """Solve the scene's load path increment by increment; raise PathNotCompleted (with the partial result) on failure."""
+    prepared = prepared or prepare(scene)
+    model = prepared.model
+    timings = dict(prepared.timings)
+    left_out = []
+
+    start = time.perf_counter()
+    probe = np.zeros(model.free_dofs.size)
+    probe[: min(3, probe.size)] = 1.0
+    prepared.factorization.solve(probe)
+    timings["back_substitution"] = time.perf_counter() - start
+    timings["linear_solve"] = timings["assembly"] + timings["factorization"] + timings["back_substitution"]
+
+    contact_start = time.perf_counter()
+    xy = model.top.positions[:, :2]
+    reach = np.hypot(*(xy - np.asarray(scene.body.center)).T)
+    candidate_radius = prepared.fine_radius + 3.0 * scene.mesh.size_contact
+    candidates = np.flatnonzero((reach <= candidate_radius) & np.isfinite(scene.body.initial_gap(xy)))
+    left_out.append(f"contact candidates: {candidates.size} of {xy.shape[0]} top points (within {candidate_radius:.3g}"
+                    f" mm of the body centre); compliance columns only for points that enter contact")
+    frictional = scene.has_tangential_load and scene.contact.mu > 0
+    if not frictional:
+        left_out.append("tangential contact unknowns: the path has no shear or twist load, or mu = 0")
+    components = (0, 1, 2) if frictional else (2,)
+    compliance = SurfaceCompliance(model, prepared.factorization, candidates, components)
+    positions = model.top.positions[candidates]
+    gap0 = scene.body.initial_gap(positions[:, :2])
+    lever = np.column_stack([-(positions[:, 1] - scene.body.center[1]), positions[:, 0] - scene.body.center[0]])
+    areas = model.top.areas[candidates]
+    augmentation = _augmentation(areas, scene.material.effective_modulus)
+    n = candidates.size
+    state = ContactState(np.zeros(n), np.zeros((n, 2)), np.zeros((n, 3)))
+    seed_depth = (estimated_contact_radius(scene) ** 2 / scene.body.radius if scene.body.shape == "sphere"
+                  else 1e-3 * scene.gel.thickness)
+    result = ContactResult(scene, model, candidates, timings=timings, mesh_info=dict(prepared.mesh_info),
+                           left_out=left_out)
+    controls = list(_controls(scene))
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(controls), desc=scene.name, unit="increment")
+    try:
+        for kind, control, friction_on in controls:
+            step_start = time.perf_counter()
+            _check_feasible(control, state, scene.contact.mu, lever)
+            mu = scene.contact.mu if friction_on else 0.0
+            try:
+                state, iterations, history = solve_increment(
+                    compliance, gap0, lever, augmentation, mu, state, control, seed_depth=seed_depth,
+                    tolerance=scene.contact.tolerance, max_iterations=scene.contact.max_iterations)
+            except ContactNotConverged as error:
+                raise PathNotCompleted(f"increment {len(result.increments) + 1} ({kind}): {error}", result) from error
+            result.increments.append(_record(kind, state, iterations, history, model, prepared.factorization,
+                                             compliance, candidates, areas, lever, scene,
+                                             time.perf_counter() - step_start))
+            if bar is not None:
+                bar.update(1)
+    except PathNotCompleted as error:
+        result.error = str(error)
+        raise
+    finally:
+        if bar is not None:
+            bar.close()
+        timings["contact"] = time.perf_counter() - contact_start
+        timings["compliance_columns"] = compliance.computed_columns
+    return result
+
+
+def _check_feasible(control: BodyControl, state: ContactState, mu: float, lever: np.ndarray) -> None:
+    """Refuse force targets the contact cannot carry (beyond gross slip) before trying to solve them."""
+    normal = control.normal_force if control.normal_force is not None else float(state.normal_force.sum())
+    if control.tangential_force is not None:
+        magnitude = math.hypot(*control.tangential_force)
+        if magnitude >= mu * normal:
+            raise ValueError(f"shear force {magnitude:.4g} N is not below mu*P = {mu * normal:.4g} N: the contact "
+                             f"cannot carry it (gross slip); use a shift (displacement control) instead")
+    if control.torque is not None and np.any(state.normal_force > 0):
+        limit = mu * float((state.normal_force * np.linalg.norm(lever, axis=1)).sum())
+        if abs(control.torque) >= limit:
+            raise ValueError(f"torque {control.torque:.4g} N mm is not below the full-slip torque "
+                             f"{limit:.4g} N mm of the current pressure: the contact cannot carry it")
+
+
+def _record(kind, state: ContactState, iterations, history, model, factorization, compliance, candidates, areas,
+            lever, scene, seconds) -> Increment:
+    """Post-process a converged state: areas, radii, stick ratio, pressures, full displacement and base traction."""
+    status = state.status
+    contact_area = float(areas[status != OPEN].sum())
+    stick_area = float(areas[status == STICK].sum())
+    pressure = state.normal_force / areas
+    traction = state.tangential_force / areas[:, None]
+    # full field: one back-substitution with the contact forces (also gives the base reactions for the sensor)
+    forces = np.zeros(model.n_dofs)
+    dofs = model.top.dofs[candidates]
+    forces[dofs[:, 0]] = state.tangential_force[:, 0]
+    forces[dofs[:, 1]] = state.tangential_force[:, 1]
+    forces[dofs[:, 2]] = -state.normal_force
+    u_free = factorization.solve(forces[model.free_dofs])
+    reaction = np.zeros(model.n_dofs)
+    reaction[model.fixed_dofs] = model.stiffness_fixed_free @ u_free
+    base_forces = reaction[model.base.dofs]                              # (n_base, 3) support force on the gel
+    displacement_full = model.full_vector(u_free)
+    _check_no_penetration(model, candidates, displacement_full, scene, state.depth)
+    return Increment(
+        load_kind=kind, normal_force=float(state.normal_force.sum()),
+        tangential_force=[float(v) for v in state.tangential_force.sum(axis=0)],
+        torque=float((lever * state.tangential_force).sum()), depth=float(state.depth),
+        shift=[float(v) for v in state.shift], angle=float(state.angle),
+        contact_area=contact_area, stick_area=stick_area, contact_radius=math.sqrt(contact_area / math.pi),
+        stick_radius=math.sqrt(stick_area / math.pi),
+        stick_ratio=math.sqrt(stick_area / contact_area) if contact_area > 0 else 0.0,
+        max_pressure=float(pressure.max()), iterations=int(iterations), residual=float(history[-1]),
+        seconds=float(seconds), status=status.copy(), pressure=pressure, traction=traction,
+        base_pressure=base_forces[:, 2] / model.base.areas, base_traction=base_forces[:, :2] / model.base.areas[:, None],
+        displacement_full=displacement_full)
+
+
+def _check_no_penetration(model, candidates, displacement_full, scene, depth) -> None:
+    """Top points outside the candidate set must stay clear of the body; else the candidate zone was too small."""
+    others = np.setdiff1d(np.arange(model.top.areas.size), candidates)
+    if others.size == 0:
+        return
+    xy = model.top.positions[others, :2]
+    gap = scene.body.initial_gap(xy) - depth - displacement_full[model.top.dofs[others, 2]]
+    if np.any(gap < 0):
+        worst = others[np.argmin(gap)]
+        raise ValueError(f"the body touches the gel outside the contact-candidate zone (point at "
+                         f"{model.top.positions[worst, :2].round(3).tolist()} mm); raise mesh.fine_radius")

@@ -1,0 +1,132 @@
+"""Linear elasticity on tetrahedra (P1, P2): stiffness, fixed base, top-surface contact points and base traction."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from skfem import Basis, BilinearForm, ElementTetP1, ElementTetP2, ElementVector, asm
+from skfem.helpers import ddot, sym_grad, trace
+
+from fem.validation import check_choice, check_positive, check_range
+
+__all__ = ["ElasticModel", "SurfacePoints", "assemble_elastic_model", "elastic_stiffness", "lame_parameters"]
+
+
+def lame_parameters(youngs_modulus: float, poissons_ratio: float) -> tuple[float, float]:
+    """Lame lambda and shear modulus G [MPa] from E [MPa] and nu."""
+    check_positive("youngs_modulus", youngs_modulus, "MPa")
+    check_range("poissons_ratio", poissons_ratio, -1.0, 0.5, low_open=True, high_open=True)
+    shear_modulus = youngs_modulus / (2.0 * (1.0 + poissons_ratio))
+    lame_lambda = youngs_modulus * poissons_ratio / ((1.0 + poissons_ratio) * (1.0 - 2.0 * poissons_ratio))
+    return lame_lambda, shear_modulus
+
+
+@BilinearForm
+def elastic_stiffness(u, v, p):
+    """a(u, v) = int sigma(eps(u)) : eps(v) dV, sigma = 2 G eps + lambda tr(eps) I  [N mm]."""
+    eps_u, eps_v = sym_grad(u), sym_grad(v)
+    return 2.0 * p["shear_modulus"] * ddot(eps_u, eps_v) + p["lame_lambda"] * trace(eps_u) * trace(eps_v)
+
+
+@dataclass
+class SurfacePoints:
+    """Nodes of a flat face: positions (n, 3) [mm], dof indices (n, 3) into the full vector, tributary areas [mm^2]."""
+
+    positions: np.ndarray
+    dofs: np.ndarray
+    areas: np.ndarray
+    triangles: np.ndarray      # (n_tri, 3) indices into positions: the face split into flat triangles
+
+
+@dataclass
+class ElasticModel:
+    """Assembled gel: stiffness on the free dofs, with the base (z = min) bonded."""
+
+    mesh: object
+    basis: Basis
+    order: int
+    stiffness_free: sp.csr_matrix      # K restricted to free dofs
+    stiffness_fixed_free: sp.csr_matrix  # rows: base dofs, cols: free dofs (for base reactions)
+    free_dofs: np.ndarray
+    fixed_dofs: np.ndarray
+    top: SurfacePoints                 # contact side, z = 0
+    base: SurfacePoints                # sensor plane, z = -thickness
+
+    @property
+    def n_dofs(self) -> int:
+        return self.basis.N
+
+    def full_vector(self, free_values: np.ndarray) -> np.ndarray:
+        """Scatter free-dof values (n_free,) or (n_free, k) into a full dof vector with zeros on the base."""
+        shape = (self.basis.N,) + np.shape(free_values)[1:]
+        full = np.zeros(shape)
+        full[self.free_dofs] = free_values
+        return full
+
+
+def _face_points(basis: Basis, order: int, z_level: float, tol: float) -> SurfacePoints:
+    """Nodal points of the boundary face at z = z_level, with tributary areas from a flat sub-triangulation."""
+    mesh = basis.mesh
+    facets = mesh.facets[:, mesh.boundary_facets()]
+    on_face = np.all(np.abs(mesh.p[2, facets] - z_level) < tol, axis=0)
+    face_facets = mesh.boundary_facets()[on_face]
+    vertex_tri = mesh.facets[:, face_facets].T                          # (n_tri, 3) vertex ids
+    component_dofs = basis.nodal_dofs                                   # (3, n_vertices)
+    if order == 1:
+        triangles_global = vertex_tri
+        point_ids = np.unique(vertex_tri)
+        dof_table = component_dofs[:, point_ids].T                      # (n, 3)
+        xyz = mesh.p[:, point_ids].T
+    else:
+        # P2: vertices and edge midpoints; each facet is split into 4 flat triangles so that every
+        # quadratic node gets a positive tributary area (P2 vertex weights of the exact rule are zero).
+        n_vertices = mesh.p.shape[1]
+        edge_ids = mesh.f2e[:, face_facets].T                           # (n_tri, 3): edges (0-1, 0-2, 1-2)?
+        edge_nodes = mesh.edges[:, edge_ids]                            # (2, n_tri, 3)
+        mid = n_vertices + edge_ids                                     # pseudo ids for midpoints
+
+        def midpoint(i, j):
+            pair = np.sort(np.stack([vertex_tri[:, i], vertex_tri[:, j]]), axis=0)
+            match = np.all(np.sort(edge_nodes, axis=0) == pair[:, :, None], axis=0)   # (n_tri, 3)
+            return mid[np.arange(len(vertex_tri)), match.argmax(axis=1)]
+
+        m01, m02, m12 = midpoint(0, 1), midpoint(0, 2), midpoint(1, 2)
+        v0, v1, v2 = vertex_tri.T
+        triangles_global = np.concatenate([np.stack(t, axis=1) for t in (
+            (v0, m01, m02), (m01, v1, m12), (m02, m12, v2), (m01, m12, m02))])
+        point_ids = np.unique(triangles_global)
+        is_vertex = point_ids < n_vertices
+        dof_table = np.empty((point_ids.size, 3), dtype=np.int64)
+        dof_table[is_vertex] = component_dofs[:, point_ids[is_vertex]].T
+        dof_table[~is_vertex] = basis.edge_dofs[:, point_ids[~is_vertex] - n_vertices].T
+        xyz = np.empty((point_ids.size, 3))
+        xyz[is_vertex] = mesh.p[:, point_ids[is_vertex]].T
+        xyz[~is_vertex] = mesh.p[:, mesh.edges[:, point_ids[~is_vertex] - n_vertices]].mean(axis=1).T
+    local = np.searchsorted(point_ids, triangles_global)
+    corners = xyz[local]                                                # (n_tri, 3, 3)
+    tri_area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
+    areas = np.bincount(local.ravel(), weights=np.repeat(tri_area / 3.0, 3), minlength=point_ids.size)
+    return SurfacePoints(positions=xyz, dofs=dof_table, areas=areas, triangles=local)
+
+
+def assemble_elastic_model(mesh, youngs_modulus: float, poissons_ratio: float, order: int = 1) -> ElasticModel:
+    """Assemble K [N/mm] for P1 or P2 tets; the base (lowest z) is fixed, the top (z = 0) is the contact side."""
+    check_choice("order", order, (1, 2))
+    lame_lambda, shear_modulus = lame_parameters(youngs_modulus, poissons_ratio)
+    element = ElementVector(ElementTetP1() if order == 1 else ElementTetP2())
+    basis = Basis(mesh, element, intorder=2 * (order - 1) if order > 1 else 1)
+    stiffness = asm(elastic_stiffness, basis, lame_lambda=lame_lambda, shear_modulus=shear_modulus).tocsr()
+    z_base = float(mesh.p[2].min())
+    tol = 1e-9 * max(1.0, float(np.ptp(mesh.p)))
+    fixed = basis.get_dofs(lambda x: np.abs(x[2] - z_base) < tol).all()
+    free = np.setdiff1d(np.arange(basis.N), fixed)
+    top = _face_points(basis, order, float(mesh.p[2].max()), tol)
+    base = _face_points(basis, order, z_base, tol)
+    return ElasticModel(
+        mesh=mesh, basis=basis, order=order,
+        stiffness_free=stiffness[free][:, free].tocsr(),
+        stiffness_fixed_free=stiffness[fixed][:, free].tocsr(),
+        free_dofs=free, fixed_dofs=fixed, top=top, base=base,
+    )
