@@ -117,7 +117,8 @@ def solve_increment(compliance: SurfaceCompliance, gap0: np.ndarray, lever: np.n
         return -lam[points]
 
     def kinematics():
-        loaded = np.flatnonzero((lam > 0) | (np.abs(tan).sum(axis=1) > 0) if frictional else lam > 0)
+        # every point carrying a force in this iterate (Newton iterates may hold negative lambda)
+        loaded = np.flatnonzero((lam != 0) | np.any(tan != 0, axis=1) if frictional else lam != 0)
         u = compliance.displacement(compliance.unknown_index(loaded), forces_flat(loaded)).reshape(n, n_comp)
         gap = gap0 - depth - u[:, -1]
         slip_inc = (u[:, :2] - omega - shift - angle * lever) if frictional else None
@@ -177,7 +178,7 @@ def solve_increment(compliance: SurfaceCompliance, gap0: np.ndarray, lever: np.n
         if frictional:
             z = tan[contact] - rc[:, None] * slip_inc[contact]
             z_norm = np.linalg.norm(z, axis=1)
-            slipping = z_norm > mu * lam_hat[contact]
+            slipping = (z_norm > mu * lam_hat[contact]) | (mu == 0.0)    # mu = 0: every point slides freely
             direction = z / np.maximum(z_norm, 1e-300)[:, None]
             perp = np.eye(2)[None] - direction[:, :, None] * direction[:, None, :]
             alpha = np.where(slipping, mu * lam_hat[contact] / np.maximum(z_norm, 1e-300), 0.0)
@@ -239,11 +240,13 @@ def _finish(compliance, lam, tan, u, depth, shift, angle, gap, slip_inc, r, mu) 
     lam_hat = lam - r * gap
     status = np.full(n, OPEN)
     in_contact = lam_hat > 0
-    status[in_contact] = STICK
+    # normal-only problems: frictionless points slide freely (SLIP); a press-only path with mu > 0 has no tangential
+    # unknowns and its points are reported as STICK (the small Spence pre-slip is what that omission leaves out)
+    status[in_contact] = SLIP if mu == 0.0 else STICK
     if slip_inc is not None:
         z_norm = np.linalg.norm(tan - r[:, None] * slip_inc, axis=1)
         # a point slips when its trial traction leaves the cone: |t - r w| > mu lambda (w != 0 on the limit)
-        status[in_contact & (z_norm > mu * lam_hat * (1.0 + 1e-8))] = SLIP
+        status[in_contact & ((z_norm > mu * lam_hat * (1.0 + 1e-8)) | (mu == 0.0))] = SLIP
     displacement = np.zeros((n, 3))
     displacement[:, list(compliance.components)] = u
     return ContactState(lam.copy(), tan.copy(), displacement, depth, np.asarray(shift, float).copy(), angle, status)

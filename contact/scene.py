@@ -137,6 +137,8 @@ class Load:
     direction: tuple[float, float] = (1.0, 0.0)
 
     def __post_init__(self):
+        if self.control not in ("force", "displacement"):
+            raise ValueError(f"load control={self.control!r} is not one of ['displacement', 'force']")
         if not self.values:
             raise ValueError(f"{self.kind.value} load has an empty list of values")
         for value in self.values:

@@ -188,6 +188,9 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
     candidates = np.flatnonzero((reach <= candidate_radius) & np.isfinite(scene.body.initial_gap(xy)))
     left_out.append(f"contact candidates: {candidates.size} of {xy.shape[0]} top points (within {candidate_radius:.3g}"
                     f" mm of the body centre); compliance columns only for points that enter contact")
+    if candidates.size == 0:
+        raise ValueError(f"the body (a {scene.body.shape} at {list(scene.body.center)} mm) is not above the gel's "
+                         f"top face: no point can come into contact")
     frictional = scene.has_tangential_load and scene.contact.mu > 0
     if not frictional:
         left_out.append("tangential contact unknowns: the path has no shear or twist load, or mu = 0")
