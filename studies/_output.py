@@ -19,6 +19,7 @@ def _atomic_write_text(path: Path, text: str) -> Path:
     try:
         with os.fdopen(handle, "w", newline="") as stream:
             stream.write(text)
+        os.chmod(tmp_name, 0o644)                  # mkstemp makes 0600; results are meant to be shared
         os.replace(tmp_name, path)
     except BaseException:
         Path(tmp_name).unlink(missing_ok=True)
