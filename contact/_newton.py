@@ -78,13 +78,15 @@ def _project_disc(vectors: np.ndarray, radius: np.ndarray) -> np.ndarray:
 def solve_increment(compliance: SurfaceCompliance, gap0: np.ndarray, lever: np.ndarray, augmentation: np.ndarray,
                     friction_coefficient: float, previous: ContactState, control: BodyControl,
                     seed_depth: float | None = None, tolerance: float = 1e-10,
-                    max_iterations: int = 60) -> tuple[ContactState, int, list[float]]:
+                    max_iterations: int = 60, mirror_y: bool = False) -> tuple[ContactState, int, list[float]]:
     """Solve one increment; return the converged state, the number of iterations and the residual history.
 
     gap0 : (n,) initial gap of each candidate point to the body at zero depth [mm]
     lever : (n, 2) rigid twist motion per radian at each point, (-(y - y_c), x - x_c) [mm/rad]
     augmentation : (n,) Alart-Curnier parameter r_i [N/mm], of the order of the local contact stiffness
     seed_depth : starting depth when the body is force-controlled and not yet in contact [mm]
+    mirror_y : the points are the half y >= 0 of a body mirror-symmetric about y = 0: the body's y-shift is held
+        at 0 (the other half balances the y-forces of this one)
     """
     frictional = compliance.components == (0, 1, 2)
     n_comp = len(compliance.components)
@@ -100,6 +102,7 @@ def solve_increment(compliance: SurfaceCompliance, gap0: np.ndarray, lever: np.n
     if depth_free and seed_depth is not None and not np.any(previous.normal_force > 0):
         depth = seed_depth
     shift = previous.shift.copy() if (shift_free or control.shift is None) else np.asarray(control.shift, float)
+    shift_components = np.array([0] if mirror_y else [0, 1])       # force-controlled shift components
     angle = previous.angle if (angle_free or control.angle is None) else float(control.angle)
     target_normal = control.normal_force
     target_tangential = None if control.tangential_force is None else np.asarray(control.tangential_force, float)
@@ -133,7 +136,7 @@ def solve_increment(compliance: SurfaceCompliance, gap0: np.ndarray, lever: np.n
         if depth_free:
             body.append(lam.sum() - target_normal)
         if shift_free:
-            body.extend(tan.sum(axis=0) - target_tangential)
+            body.extend((tan.sum(axis=0) - target_tangential)[shift_components])
         if angle_free:
             body.append((lever * tan).sum() - target_torque)
         return float(np.linalg.norm(np.concatenate(parts + [np.asarray(body)]))) / force_scale
@@ -154,7 +157,7 @@ def solve_increment(compliance: SurfaceCompliance, gap0: np.ndarray, lever: np.n
         cols = compliance.unknown_index(contact)
         sign = np.tile([1.0, 1.0, -1.0], m) if frictional else -np.ones(m)
         coupling = compliance.block(cols, cols) * sign[None, :]          # u at contact dofs = coupling @ y
-        n_body = int(depth_free) + 2 * int(shift_free) + int(angle_free)
+        n_body = int(depth_free) + shift_components.size * int(shift_free) + int(angle_free)
         size = n_comp * m + n_body
         jac = np.zeros((size, size))
         rhs = np.zeros(size)
@@ -165,7 +168,7 @@ def solve_increment(compliance: SurfaceCompliance, gap0: np.ndarray, lever: np.n
         if depth_free:
             depth_col, col = col, col + 1
         if shift_free:
-            shift_cols, col = np.array([col, col + 1]), col + 2
+            shift_cols, col = col + np.arange(shift_components.size), col + shift_components.size
         if angle_free:
             angle_col = col
         # normal rows: r (gap0 - depth - u_z) = 0
@@ -198,9 +201,13 @@ def solve_increment(compliance: SurfaceCompliance, gap0: np.ndarray, lever: np.n
             known_motion = omega[contact] + (0.0 if shift_free else shift) + (0.0 if angle_free else angle * lever[contact])
             rhs[rows] = np.einsum("kab,kb->ka", w_coef, known_motion).ravel()
             if shift_free:
-                jac[rows[:, None], shift_cols[None, :]] = -w_coef.reshape(2 * m, 2)
+                jac[rows[:, None], shift_cols[None, :]] = -w_coef.reshape(2 * m, 2)[:, shift_components]
             if angle_free:
                 jac[rows, angle_col] = -np.einsum("kab,kb->ka", w_coef, lever[contact]).ravel()
+            held = np.flatnonzero(compliance.constrained[cols])          # u_y = 0 on a symmetry plane:
+            jac[held] = 0.0                                              # there t_y = 0 by symmetry
+            jac[held, held] = 1.0
+            rhs[held] = 0.0
         # body equilibrium rows
         row = n_comp * m
         if depth_free:
@@ -208,10 +215,10 @@ def solve_increment(compliance: SurfaceCompliance, gap0: np.ndarray, lever: np.n
             rhs[row] = target_normal
             row += 1
         if shift_free:
-            for a in range(2):
-                jac[row + a, np.arange(m) * 3 + a] = 1.0
-                rhs[row + a] = target_tangential[a]
-            row += 2
+            for offset, a in enumerate(shift_components):
+                jac[row + offset, np.arange(m) * 3 + a] = 1.0
+                rhs[row + offset] = target_tangential[a]
+            row += shift_components.size
         if angle_free:
             jac[row, np.arange(m) * 3] = lever[contact, 0]
             jac[row, np.arange(m) * 3 + 1] = lever[contact, 1]
@@ -228,7 +235,8 @@ def solve_increment(compliance: SurfaceCompliance, gap0: np.ndarray, lever: np.n
         if depth_free:
             depth = float(solution[depth_col])
         if shift_free:
-            shift = solution[shift_cols].copy()
+            shift = np.zeros(2)
+            shift[shift_components] = solution[shift_cols]
         if angle_free:
             angle = float(solution[angle_col])
     raise ContactNotConverged(f"no convergence in {max_iterations} Newton iterations", history)

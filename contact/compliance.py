@@ -38,8 +38,10 @@ class SurfaceCompliance:
         free_position[model.free_dofs] = np.arange(model.free_dofs.size)
         dofs = model.top.dofs[self.points][:, self.components]          # (n, n_comp) full dof ids
         self.rows = free_position[dofs].ravel()                         # (n * n_comp,) free-vector positions
-        if np.any(self.rows < 0):
-            raise ValueError("a contact candidate point lies on the fixed base")
+        # dofs held by a Dirichlet condition (u_y = 0 on a symmetry plane) have zero rows and columns
+        self.constrained = self.rows < 0
+        if np.any(self.constrained[len(self.components) - 1::len(self.components)]):
+            raise ValueError("a contact candidate point has its normal displacement fixed (it lies on the base)")
         self.size = self.rows.size
         self._slot = np.full(self.size, -1)                             # column -> storage slot
         self._store = np.empty((self.size, 0))
@@ -62,13 +64,17 @@ class SurfaceCompliance:
             grown = np.empty((self.size, max(needed, 2 * self._store.shape[1], 64)))
             grown[:, :self._count] = self._store[:, :self._count]
             self._store = grown
-        rhs = np.zeros((self.factorization.size, missing.size))
-        rhs[self.rows[missing], np.arange(missing.size)] = 1.0
-        solution = self.factorization.solve(rhs)
-        self._store[:, self._count:needed] = solution[self.rows]
+        free = ~self.constrained[missing]
+        rhs = np.zeros((self.factorization.size, int(free.sum())))
+        rhs[self.rows[missing[free]], np.arange(rhs.shape[1])] = 1.0
+        block = np.zeros((self.size, missing.size))
+        if rhs.shape[1]:
+            solution = self.factorization.solve(rhs)
+            block[np.ix_(~self.constrained, np.flatnonzero(free))] = solution[self.rows[~self.constrained]]
+        self._store[:, self._count:needed] = block
         self._slot[missing] = np.arange(self._count, needed)
         self._count = needed
-        self.solves += missing.size
+        self.solves += int(free.sum())
 
     def block(self, row_index: np.ndarray | slice, columns: np.ndarray) -> np.ndarray:
         """C[rows, columns] (computing missing columns first); rows default to all candidate dofs."""

@@ -96,8 +96,11 @@ class ContactSpec:
     frictionless_press: bool = False
     tolerance: float = 1e-10          # Newton residual, relative to the normal force
     max_iterations: int = 60
+    symmetry: str = "auto"            # "auto": half model when the scene is mirror-symmetric about y = 0; "off"
 
     def __post_init__(self):
+        if self.symmetry not in ("auto", "off"):
+            raise ValueError(f"contact.symmetry={self.symmetry!r} is not one of ['auto', 'off']")
         check_range("contact.mu", self.mu, 0.0, 5.0)
         check_range("contact.tolerance", self.tolerance, 0.0, 1e-3, low_open=True)
         check_range("contact.max_iterations", self.max_iterations, 1, 10_000)
@@ -176,6 +179,13 @@ class Scene:
             raise ValueError("scene has no [[load]]: give at least one press")
         if self.loads[0].kind != LoadKind.PRESS:
             raise ValueError(f"the first load must be a press, not {self.loads[0].kind.value!r}")
+
+    @property
+    def mirror_symmetric(self) -> bool:
+        """True when gel, body and every load are symmetric about the plane y = 0 (press, shear along x)."""
+        return (self.body.center[1] == 0.0 and all(
+            load.kind == LoadKind.PRESS or (load.kind == LoadKind.SHEAR and load.direction[1] == 0.0)
+            for load in self.loads))
 
     @property
     def has_tangential_load(self) -> bool:

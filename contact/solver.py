@@ -111,6 +111,7 @@ class Prepared:
     timings: dict
     mesh_info: dict
     fine_radius: float
+    half: bool                        # mirror-symmetric half model (y >= 0): forces and areas count twice
 
 
 def prepare(scene: Scene) -> Prepared:
@@ -118,13 +119,16 @@ def prepare(scene: Scene) -> Prepared:
     timings = {}
     start = time.perf_counter()
     fine_radius = scene.mesh.fine_radius or (1.3 * estimated_contact_radius(scene) + 2.0 * scene.mesh.size_contact)
+    half = scene.contact.symmetry == "auto" and scene.mirror_symmetric
     spec = BlockMeshSpec(width=scene.gel.width, depth=scene.gel.depth, thickness=scene.gel.thickness,
                          size_contact=scene.mesh.size_contact * scene.mesh.order, size_far=scene.mesh.size_far,
-                         fine_radius=fine_radius, fine_center=tuple(scene.body.center), grading=scene.mesh.grading)
+                         fine_radius=fine_radius, fine_center=tuple(scene.body.center), grading=scene.mesh.grading,
+                         half=half)
     mesh = graded_block_mesh(spec)
     timings["mesh"] = time.perf_counter() - start
     start = time.perf_counter()
-    model = assemble_elastic_model(mesh, scene.material.E, scene.material.nu, scene.mesh.order)
+    model = assemble_elastic_model(mesh, scene.material.E, scene.material.nu, scene.mesh.order,
+                                   symmetry_plane_y=0.0 if half else None)
     timings["assembly"] = time.perf_counter() - start
     start = time.perf_counter()
     factorization = SpdFactorization(model.stiffness_free)
@@ -134,8 +138,8 @@ def prepare(scene: Scene) -> Prepared:
                  "free_dofs": int(model.free_dofs.size), "order": scene.mesh.order,
                  "top_points": int(model.top.areas.size), "min_dihedral_deg": quality.min_dihedral_deg,
                  "min_radius_ratio": quality.min_radius_ratio, "fine_radius": fine_radius,
-                 "solver_backend": factorization.backend}
-    return Prepared(model, factorization, timings, mesh_info, fine_radius)
+                 "solver_backend": factorization.backend, "half_model": half}
+    return Prepared(model, factorization, timings, mesh_info, fine_radius, half)
 
 
 def _augmentation(areas: np.ndarray, effective_modulus: float) -> np.ndarray:
@@ -188,6 +192,10 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
     candidates = np.flatnonzero((reach <= candidate_radius) & np.isfinite(scene.body.initial_gap(xy)))
     left_out.append(f"contact candidates: {candidates.size} of {xy.shape[0]} top points (within {candidate_radius:.3g}"
                     f" mm of the body centre); compliance columns only for points that enter contact")
+    if prepared.half:
+        left_out.append("the half y < 0: gel, body and loads are mirror-symmetric about y = 0 (press and shear along "
+                        "x only); forces and areas are doubled in the report, fields cover y >= 0")
+    multiplicity = 2.0 if prepared.half else 1.0
     if candidates.size == 0:
         raise ValueError(f"the body (a {scene.body.shape} at {list(scene.body.center)} mm) is not above the gel's "
                          f"top face: no point can come into contact")
@@ -203,7 +211,10 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
     augmentation = _augmentation(areas, scene.material.effective_modulus)
     n = candidates.size
     state = ContactState(np.zeros(n), np.zeros((n, 2)), np.zeros((n, 3)))
-    seed_depth = (estimated_contact_radius(scene) ** 2 / scene.body.radius if scene.body.shape == "sphere"
+    # First Newton iterate of a force-controlled press: the depth whose geometric overlap r < sqrt(2 R d) matches the
+    # Hertz contact radius, d = a^2 / (2 R); the Hertz depth a^2 / R would start with sqrt(2) a and twice the points
+    # (each needing compliance columns).
+    seed_depth = (estimated_contact_radius(scene) ** 2 / (2.0 * scene.body.radius) if scene.body.shape == "sphere"
                   else 1e-3 * scene.gel.thickness)
     result = ContactResult(scene, model, candidates, timings=timings, mesh_info=dict(prepared.mesh_info),
                            left_out=left_out)
@@ -216,17 +227,19 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
     try:
         for kind, control, friction_on in controls:
             step_start = time.perf_counter()
+            control = _scaled(control, 1.0 / multiplicity)
             _check_feasible(control, state, scene.contact.mu, lever)
             mu = scene.contact.mu if friction_on else 0.0
             try:
                 state, iterations, history = solve_increment(
                     compliance, gap0, lever, augmentation, mu, state, control, seed_depth=seed_depth,
-                    tolerance=scene.contact.tolerance, max_iterations=scene.contact.max_iterations)
+                    tolerance=scene.contact.tolerance, max_iterations=scene.contact.max_iterations,
+                    mirror_y=prepared.half)
             except ContactNotConverged as error:
                 raise PathNotCompleted(f"increment {len(result.increments) + 1} ({kind}): {error}", result) from error
             result.increments.append(_record(kind, state, iterations, history, model, prepared.factorization,
                                              compliance, candidates, areas, lever, scene,
-                                             time.perf_counter() - step_start))
+                                             time.perf_counter() - step_start, multiplicity))
             if bar is not None:
                 bar.update(1)
     except PathNotCompleted as error:
@@ -238,6 +251,19 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
         timings["contact"] = time.perf_counter() - contact_start
         timings["compliance_columns"] = compliance.computed_columns
     return result
+
+
+def _scaled(control: BodyControl, factor: float) -> BodyControl:
+    """The control with its force targets multiplied by ``factor`` (a half model carries half of each force)."""
+    import dataclasses
+
+    def times(value):
+        if value is None:
+            return None
+        return tuple(factor * v for v in value) if isinstance(value, tuple) else factor * value
+
+    return dataclasses.replace(control, normal_force=times(control.normal_force),
+                               tangential_force=times(control.tangential_force), torque=times(control.torque))
 
 
 def _check_feasible(control: BodyControl, state: ContactState, mu: float, lever: np.ndarray) -> None:
@@ -256,11 +282,14 @@ def _check_feasible(control: BodyControl, state: ContactState, mu: float, lever:
 
 
 def _record(kind, state: ContactState, iterations, history, model, factorization, compliance, candidates, areas,
-            lever, scene, seconds) -> Increment:
-    """Post-process a converged state: areas, radii, stick ratio, pressures, full displacement and base traction."""
+            lever, scene, seconds, multiplicity=1.0) -> Increment:
+    """Post-process a converged state: areas, radii, stick ratio, pressures, full displacement and base traction.
+
+    ``multiplicity`` = 2 for a half model: whole-body forces and areas are twice those of the computed half.
+    """
     status = state.status
-    contact_area = float(areas[status != OPEN].sum())
-    stick_area = float(areas[status == STICK].sum())
+    contact_area = multiplicity * float(areas[status != OPEN].sum())
+    stick_area = multiplicity * float(areas[status == STICK].sum())
     pressure = state.normal_force / areas
     traction = state.tangential_force / areas[:, None]
     # full field: one back-substitution with the contact forces (also gives the base reactions for the sensor)
@@ -276,9 +305,9 @@ def _record(kind, state: ContactState, iterations, history, model, factorization
     displacement_full = model.full_vector(u_free)
     _check_no_penetration(model, candidates, displacement_full, scene, state.depth)
     return Increment(
-        load_kind=kind, normal_force=float(state.normal_force.sum()),
-        tangential_force=[float(v) for v in state.tangential_force.sum(axis=0)],
-        torque=float((lever * state.tangential_force).sum()), depth=float(state.depth),
+        load_kind=kind, normal_force=multiplicity * float(state.normal_force.sum()),
+        tangential_force=[multiplicity * float(v) for v in state.tangential_force.sum(axis=0)],
+        torque=multiplicity * float((lever * state.tangential_force).sum()), depth=float(state.depth),
         shift=[float(v) for v in state.shift], angle=float(state.angle),
         contact_area=contact_area, stick_area=stick_area, contact_radius=math.sqrt(contact_area / math.pi),
         stick_radius=math.sqrt(stick_area / math.pi),

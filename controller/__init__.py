@@ -6,6 +6,11 @@ from .filters import FirstOrderLowPass, sample_period
 from .grasp_force_control import GraspForceController, GraspForceParameters
 from .multirate import LoopSample, MultiRateRunner, rate_ratio
 from .references import GraspPhase, ReferenceGenerator, ReferenceParameters
+from .calibration import EstimatorCalibration, PositionSource, calibrate_gain
+from .estimator import (BumpLayout, BumpReference, EstimatorSettings, SlipEstimate, bump_positions, estimate_slip,
+                        rotational_stick_ratio, translational_stick_ratio)
+from .rigid_transform import FrameStatus, RigidTransformTrace, fit_rigid_transform
+from .sensor import Interpolation, PressureField, SensorArray, cell_force_operator, resample_time_series, sample
 
 __all__ = [
     "AccelerationControlParameters",
@@ -24,4 +29,24 @@ __all__ = [
     "contact_force",
     "rate_ratio",
     "sample_period",
+    "EstimatorCalibration",
+    "PositionSource",
+    "calibrate_gain",
+    "BumpLayout",
+    "BumpReference",
+    "EstimatorSettings",
+    "SlipEstimate",
+    "bump_positions",
+    "estimate_slip",
+    "rotational_stick_ratio",
+    "translational_stick_ratio",
+    "FrameStatus",
+    "RigidTransformTrace",
+    "fit_rigid_transform",
+    "Interpolation",
+    "PressureField",
+    "SensorArray",
+    "cell_force_operator",
+    "resample_time_series",
+    "sample",
 ]

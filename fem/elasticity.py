@@ -111,8 +111,12 @@ def _face_points(basis: Basis, order: int, z_level: float, tol: float) -> Surfac
     return SurfacePoints(positions=xyz, dofs=dof_table, areas=areas, triangles=local)
 
 
-def assemble_elastic_model(mesh, youngs_modulus: float, poissons_ratio: float, order: int = 1) -> ElasticModel:
-    """Assemble K [N/mm] for P1 or P2 tets; the base (lowest z) is fixed, the top (z = 0) is the contact side."""
+def assemble_elastic_model(mesh, youngs_modulus: float, poissons_ratio: float, order: int = 1,
+                           symmetry_plane_y: float | None = None) -> ElasticModel:
+    """Assemble K [N/mm] for P1 or P2 tets; the base (lowest z) is fixed, the top (z = 0) is the contact side.
+
+    With ``symmetry_plane_y`` the mesh is half of a mirror-symmetric body: u_y = 0 on that plane.
+    """
     check_choice("order", order, (1, 2))
     lame_lambda, shear_modulus = lame_parameters(youngs_modulus, poissons_ratio)
     element = ElementVector(ElementTetP1() if order == 1 else ElementTetP2())
@@ -121,6 +125,11 @@ def assemble_elastic_model(mesh, youngs_modulus: float, poissons_ratio: float, o
     z_base = float(mesh.p[2].min())
     tol = 1e-9 * max(1.0, float(np.ptp(mesh.p)))
     fixed = basis.get_dofs(lambda x: np.abs(x[2] - z_base) < tol).all()
+    if symmetry_plane_y is not None:
+        mirror = basis.get_dofs(lambda x: np.abs(x[1] - symmetry_plane_y) < tol).all()
+        mirror_y = mirror[np.isin(mirror, basis.nodal_dofs[1]) | (np.isin(mirror, basis.edge_dofs[1])
+                                                                  if order == 2 else False)]
+        fixed = np.union1d(fixed, mirror_y)
     free = np.setdiff1d(np.arange(basis.N), fixed)
     top = _face_points(basis, order, float(mesh.p[2].max()), tol)
     base = _face_points(basis, order, z_base, tol)

@@ -33,6 +33,7 @@ class BlockMeshSpec:
     fine_depth: float = 0.2
     fine_center: tuple[float, float] = (0.0, 0.0)
     grading: float = 0.5
+    half: bool = False          # keep only y >= 0 (a mirror-symmetric half model about the plane y = 0)
 
     def __post_init__(self):
         for name in ("width", "depth", "thickness", "size_contact", "size_far", "grading"):
@@ -84,7 +85,8 @@ def graded_block_mesh(spec: BlockMeshSpec, max_rounds: int = 80):
         cells = max(2, int(np.ceil(length / spec.size_far)))
         return np.linspace(low, low + length, cells + 1)
 
-    mesh = MeshTet.init_tensor(axis(spec.width, -spec.width / 2), axis(spec.depth, -spec.depth / 2),
+    y_axis = axis(spec.depth / 2, 0.0) if spec.half else axis(spec.depth, -spec.depth / 2)
+    mesh = MeshTet.init_tensor(axis(spec.width, -spec.width / 2), y_axis,
                                axis(spec.thickness, -spec.thickness))
     with quiet_skfem():
         for _ in range(max_rounds):

@@ -1,0 +1,76 @@
+"""On-disk cache of tetrahedral meshes (npz of nodes p and tets t), keyed by a hash of everything that made them.
+
+A sweep must never re-mesh the same geometry (DESIGN.md): the key hashes the geometry, the mesh parameters and the
+mesher versions, and files are written atomically (temporary file in the same folder, then ``os.replace``), so an
+interrupted run leaves either the old file or the new one, never half of one.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["CACHE_ENV_VAR", "MeshCache", "cache_key", "default_cache_dir"]
+
+CACHE_ENV_VAR = "FINGERTIP_CACHE"
+
+
+def default_cache_dir() -> Path:
+    """Folder from the environment variable FINGERTIP_CACHE, else ~/.cache/fingertip-contact."""
+    configured = os.environ.get(CACHE_ENV_VAR)
+    return Path(configured).expanduser() if configured else Path.home() / ".cache" / "fingertip-contact"
+
+
+def cache_key(payload: dict) -> str:
+    """SHA-256 (hex, 64 chars) of ``payload`` as canonical JSON (sorted keys; floats by repr, so exact)."""
+    text = json.dumps(payload, sort_keys=True, separators=(",", ":"), default=repr)
+    return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+class MeshCache:
+    """Meshes stored as ``<directory>/mesh-<key>.npz`` holding ``p`` (3, n_nodes), ``t`` (4, n_tets) and a JSON
+    ``metadata`` string (the inputs and the quality report, for a human looking at the folder)."""
+
+    def __init__(self, directory: str | os.PathLike | None = None):
+        self.directory = Path(directory) if directory is not None else default_cache_dir()
+
+    def path(self, key: str) -> Path:
+        return self.directory / f"mesh-{key}.npz"
+
+    def load(self, key: str) -> tuple[np.ndarray, np.ndarray] | None:
+        """(p, t) stored under ``key``, or None if absent or unreadable (an unreadable file is then re-made)."""
+        path = self.path(key)
+        if not path.is_file():
+            return None
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                return np.array(data["p"], dtype=float), np.array(data["t"], dtype=np.int64)
+        except (OSError, KeyError, ValueError):
+            return None
+
+    def metadata(self, key: str) -> dict:
+        """The metadata stored with ``key`` (empty dict if absent)."""
+        path = self.path(key)
+        if not path.is_file():
+            return {}
+        with np.load(path, allow_pickle=False) as data:
+            return json.loads(str(data["metadata"])) if "metadata" in data else {}
+
+    def save(self, key: str, nodes: np.ndarray, tets: np.ndarray, metadata: dict | None = None) -> Path:
+        """Write (p, t) under ``key`` atomically; returns the file path."""
+        self.directory.mkdir(parents=True, exist_ok=True)
+        handle, temporary = tempfile.mkstemp(dir=self.directory, prefix=".mesh-", suffix=".npz.tmp")
+        try:
+            with os.fdopen(handle, "wb") as stream:
+                np.savez(stream, p=np.asarray(nodes, dtype=float), t=np.asarray(tets, dtype=np.int64),
+                         metadata=np.array(json.dumps(metadata or {}, sort_keys=True, default=repr)))
+            os.replace(temporary, self.path(key))
+        except BaseException:
+            Path(temporary).unlink(missing_ok=True)
+            raise
+        return self.path(key)

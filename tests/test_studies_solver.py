@@ -1,0 +1,110 @@
+"""The scene runner's outputs (result.json, steps.csv, VTU), the convergence study, and the half model's symmetry."""
+
+import csv
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+from contact.scene import ContactSpec, Load, LoadKind, Material, MeshSettings, Scene
+from contact.solver import solve_scene
+
+SMALL_SCENE = """
+name = "small"
+[gel]
+shape = "block"
+width = 20.0
+depth = 20.0
+thickness = 10.0
+[material]
+E = 1.0
+nu = 0.45
+[body]
+shape = "sphere"
+radius = 10.0
+[contact]
+mu = 0.5
+{contact_extra}
+[mesh]
+size_contact = 0.35
+size_far = 4.0
+[[load]]
+kind = "press"
+force = 0.2
+[[load]]
+kind = "shear"
+force = [0.05, 0.08]
+[[load]]
+kind = "twist"
+angle = [0.01]
+"""
+
+
+def test_run_writes_json_csv_and_vtu(tmp_path):
+    import meshio
+
+    from studies.__main__ import main
+
+    scene = tmp_path / "small.toml"
+    scene.write_text(SMALL_SCENE.format(contact_extra=""))
+    assert main(["run", str(scene), "--out", str(tmp_path / "out"), "--vtu", "--quiet"]) == 0
+    document = json.loads((tmp_path / "out" / "result.json").read_text())
+    assert set(document["mesh"]) >= {"nodes", "elements", "dofs", "order"}
+    assert set(document["timings"]) >= {"mesh", "assembly", "factorization", "contact", "linear_solve"}
+    increments = document["increments"]
+    assert [inc["load_kind"] for inc in increments] == ["press", "shear", "shear", "twist"]
+    for key in ("normal_force", "tangential_force", "torque", "depth", "shift", "angle", "contact_area",
+                "stick_area", "contact_radius", "stick_radius", "stick_ratio", "max_pressure", "iterations",
+                "residual", "seconds"):
+        assert key in increments[0]
+    assert increments[1]["tangential_force"][0] == pytest.approx(0.05, rel=1e-9)
+    assert increments[3]["angle"] == pytest.approx(0.01)
+    with open(tmp_path / "out" / "steps.csv") as stream:
+        rows = list(csv.DictReader(stream))
+    assert len(rows) == 4 and float(rows[2]["tangential_force_x"]) == pytest.approx(0.08, rel=1e-9)
+    vtu = meshio.read(tmp_path / "out" / "increment_002.vtu")
+    state = vtu.point_data["contact_state"]
+    assert set(np.unique(state)) <= {-1.0, 0.0, 1.0, 2.0} and np.any(state == 2.0) and np.any(state == 1.0)
+
+
+def test_failed_increment_keeps_the_converged_ones_on_disk(tmp_path):
+    from contact.solver import PathNotCompleted
+    from studies.__main__ import main
+
+    scene = tmp_path / "small.toml"
+    scene.write_text(SMALL_SCENE.format(contact_extra="max_iterations = 6"))
+    with pytest.raises(PathNotCompleted):
+        main(["run", str(scene), "--out", str(tmp_path / "out"), "--quiet"])
+    document = json.loads((tmp_path / "out" / "result.json").read_text())
+    assert document["error"] and "residual history" in document["error"]
+    assert len(document["increments"]) >= 1
+
+
+def test_half_model_matches_the_full_model():
+    loads = (Load(LoadKind.PRESS, "force", (0.2,)), Load(LoadKind.SHEAR, "force", (0.05, 0.08)))
+    base = Scene(name="sym", material=Material(1.0, 0.45), mesh=MeshSettings(size_contact=0.35), loads=loads)
+    half = solve_scene(base)
+    full = solve_scene(dataclasses.replace(base, contact=ContactSpec(symmetry="off")))
+    assert half.mesh_info["half_model"] and not full.mesh_info["half_model"]
+    for a, b in zip(half.increments, full.increments):
+        assert a.normal_force == pytest.approx(b.normal_force, rel=1e-9)
+        # the two meshes differ (the full one is not refined mirror-symmetrically): agree to the discretisation
+        assert a.shift[0] == pytest.approx(b.shift[0], rel=0.02)
+        assert a.stick_ratio == pytest.approx(b.stick_ratio, abs=0.05)
+        assert a.contact_radius == pytest.approx(b.contact_radius, rel=0.05)
+
+
+def test_convergence_study_quick(tmp_path):
+    from studies import convergence
+
+    summary = convergence.run(tmp_path, quick=True)
+    with open(tmp_path / "convergence.csv") as stream:
+        rows = list(csv.DictReader(stream))
+    assert {row["study"] for row in rows} == {"element size (P1)", "element order (P2)", "shear increments"}
+    assert all(float(row["wall_time"]) > 0 for row in rows)
+    assert (tmp_path / "convergence.png").exists() and (tmp_path / "convergence.pdf").exists()
+    # force-controlled monotonic shear is path independent (Cattaneo-Mindlin): 1 and 5 increments agree
+    by_increments = {int(r["n_shear"]): float(r["final_stick_ratio_error"]) for r in rows if r["study"] == "shear increments"}
+    assert by_increments[1] == pytest.approx(by_increments[5], abs=0.02)
+    assert np.isfinite(summary["max_error"])
