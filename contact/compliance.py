@@ -33,7 +33,6 @@ class SurfaceCompliance:
         self.factorization = factorization
         self.points = np.asarray(points)
         self.components = tuple(components)
-        n_comp = len(self.components)
         free_position = np.full(model.n_dofs, -1)
         free_position[model.free_dofs] = np.arange(model.free_dofs.size)
         dofs = model.top.dofs[self.points][:, self.components]          # (n, n_comp) full dof ids

@@ -27,20 +27,65 @@ class LoadKind(str, Enum):
     TWIST = "twist"
 
 
+_GEL_SHAPES = {"block": "BlockGeometry", "cap": "CapGeometry", "flat_cap": "FlatCapGeometry", "array": "ArrayGeometry"}
+
+
 @dataclass(frozen=True)
 class GelSpec:
-    """The gel: a block x in +-width/2, y in +-depth/2, z in [-thickness, 0] [mm]; base bonded."""
+    """The gel: a shape and the parameters of its fem.geometry dataclass [mm]; base bonded, top point at z = 0.
+
+    block: width, depth, thickness; cap: width, depth, base_thickness, cap_radius, sphere_radius (or exponent and
+    power_law_height); flat_cap: width, depth, base_thickness, cap_radius, flat_radius, edge_radius; array: rows,
+    cols, bump_radius, pitch, base_width, base_depth, base_thickness, fillet. Omitted parameters take the
+    geometry's defaults.
+    """
 
     shape: str = "block"
-    width: float = 40.0
-    depth: float = 40.0
-    thickness: float = 20.0
+    parameters: tuple = (("width", 40.0), ("depth", 40.0), ("thickness", 20.0))
 
     def __post_init__(self):
-        if self.shape != "block":
-            raise ValueError(f"gel.shape={self.shape!r} is not one of ['block'] (caps and arrays come with fem.geometry)")
-        for name in ("width", "depth", "thickness"):
-            check_positive(f"gel.{name}", getattr(self, name), "mm")
+        if self.shape not in _GEL_SHAPES:
+            raise ValueError(f"gel.shape={self.shape!r} is not one of {sorted(_GEL_SHAPES)}")
+        object.__setattr__(self, "_geometry", self._build_geometry())   # validated where the scene enters
+
+    @property
+    def geometry(self):
+        """The fem.geometry dataclass of this gel (validated)."""
+        return self._geometry
+
+    def _build_geometry(self):
+        import fem.geometry
+
+        cls = getattr(fem.geometry, _GEL_SHAPES[self.shape])
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(dict(self.parameters)) - known)
+        if unknown:
+            raise ValueError(f"unknown key(s) {unknown} in [gel] for shape {self.shape!r}; allowed: {sorted(known)}")
+        try:
+            return cls(**dict(self.parameters))
+        except (TypeError, ValueError) as error:
+            raise ValueError(f"[gel] ({self.shape}): {error}") from None
+
+    @property
+    def curvature_radius(self) -> float:
+        """Radius of curvature of the gel at its first-contact points [mm] (inf where it is flat)."""
+        geometry = self.geometry
+        if self.shape == "cap" and geometry.exponent in (None, 2, 2.0):
+            return geometry.sphere_radius if geometry.exponent is None else 1.0 / (2.0 * geometry.profile_coefficient)
+        if self.shape == "flat_cap" and geometry.flat_radius == 0.0:
+            return geometry.edge_radius
+        if self.shape == "array":
+            return geometry.bump_radius
+        return math.inf
+
+    def __getattr__(self, name):
+        # width, depth, thickness, ... read through to the geometry (convenient for the block)
+        if name.startswith("_") or name in ("shape", "parameters"):
+            raise AttributeError(name)
+        try:
+            return getattr(self.geometry, name)
+        except AttributeError:
+            raise AttributeError(f"gel of shape {self.shape!r} has no {name!r}") from None
 
 
 @dataclass(frozen=True)
@@ -183,7 +228,7 @@ class Scene:
     @property
     def mirror_symmetric(self) -> bool:
         """True when gel, body and every load are symmetric about the plane y = 0 (press, shear along x)."""
-        return (self.body.center[1] == 0.0 and all(
+        return (self.gel.shape == "block" and self.body.center[1] == 0.0 and all(
             load.kind == LoadKind.PRESS or (load.kind == LoadKind.SHEAR and load.direction[1] == 0.0)
             for load in self.loads))
 
@@ -245,7 +290,13 @@ def scene_from_dict(data: dict) -> Scene:
     for required in ("gel", "material", "body", "load"):
         if required not in data:
             raise ValueError(f"scene is missing [{required}]" if required != "load" else "scene is missing [[load]]")
+    gel_table = data["gel"]
+    if not isinstance(gel_table, dict):
+        raise ValueError(f"[gel] must be a table, got {type(gel_table).__name__}")
+    sections = {key: cls for key, cls in sections.items() if key != "gel"}
     parts = {key: _build(cls, data.get(key, {}), key) for key, cls in sections.items()}
+    parts["gel"] = GelSpec(shape=gel_table.get("shape", "block"),
+                           parameters=tuple(sorted((k, v) for k, v in gel_table.items() if k != "shape")))
     loads = data["load"]
     if not isinstance(loads, list):
         raise ValueError("'load' must be an array of tables: write [[load]]")

@@ -15,7 +15,8 @@ from fem.elasticity import ElasticModel, assemble_elastic_model
 from fem.linear_solver import SpdFactorization
 from fem.mesh import BlockMeshSpec, graded_block_mesh, mesh_quality
 
-__all__ = ["Increment", "ContactResult", "PathNotCompleted", "prepare", "solve_scene", "OPEN", "STICK", "SLIP"]
+__all__ = ["Increment", "ContactResult", "PathNotCompleted", "Prepared", "prepare", "preparation_key", "solve_scene",
+           "OPEN", "STICK", "SLIP"]
 
 
 @dataclass
@@ -91,15 +92,36 @@ def _max_normal_load(scene: Scene) -> tuple[float | None, float | None]:
     return (max(forces) if forces else None), (max(depths) if depths else None)
 
 
-def estimated_contact_radius(scene: Scene) -> float:
-    """Half-space (Hertz) contact radius at the largest press of the path [mm]; for a plane, the gel half-diagonal."""
-    if scene.body.shape == "plane":
-        return 0.5 * math.hypot(scene.gel.width, scene.gel.depth)
+def contact_centers(scene: Scene) -> np.ndarray:
+    """Where the body first touches the gel, (k, 2) [mm]: below a sphere's centre, or every bump top for a plane."""
+    if scene.body.shape == "sphere":
+        return np.array([scene.body.center], dtype=float)
+    return np.asarray(scene.gel.geometry.contact_centers(), dtype=float).reshape(-1, 2)
+
+
+def estimated_contact(scene: Scene) -> tuple[float, float]:
+    """Half-space estimate of the contact radius [mm] and indentation [mm] at each contact centre, largest press.
+
+    Curved contacts (sphere body or curved gel) use Hertz with 1/R = 1/R_body + 1/R_gel and the normal force shared
+    equally by the contact centres; a flat-topped cap under a plane acts as a flat punch of its flat radius; a
+    plane on a flat block covers the whole top. Only used to size the fine zone and to seed the first press.
+    """
     force, depth = _max_normal_load(scene)
-    radius = scene.body.radius
-    from_force = (3.0 * force * radius / (4.0 * scene.material.effective_modulus)) ** (1 / 3) if force else 0.0
-    from_depth = math.sqrt(radius * depth) if depth else 0.0
-    return max(from_force, from_depth)
+    e_star = scene.material.effective_modulus
+    n_centers = len(contact_centers(scene))
+    body_radius = scene.body.radius if scene.body.shape == "sphere" else math.inf
+    curvature = 1.0 / body_radius + 1.0 / scene.gel.curvature_radius
+    if curvature > 0.0:
+        radius = 1.0 / curvature
+        from_force = (3.0 * (force or 0.0) / n_centers * radius / (4.0 * e_star)) ** (1 / 3)
+        contact_radius = max(from_force, math.sqrt(radius * depth) if depth else 0.0)
+        return contact_radius, contact_radius**2 / radius
+    if scene.gel.shape == "flat_cap":
+        flat = scene.gel.geometry.flat_radius
+        indentation = max(depth or 0.0, (force or 0.0) / n_centers / (2.0 * e_star * flat))
+        return flat + math.sqrt(2.0 * scene.gel.geometry.edge_radius * indentation), indentation
+    half_diagonal = 0.5 * math.hypot(scene.gel.width, scene.gel.depth)
+    return half_diagonal, depth or 1e-3 * scene.gel.thickness
 
 
 @dataclass
@@ -112,19 +134,41 @@ class Prepared:
     mesh_info: dict
     fine_radius: float
     half: bool                        # mirror-symmetric half model (y >= 0): forces and areas count twice
+    compliances: dict = field(default_factory=dict)   # SurfaceCompliance per candidate set, reused across solves
+
+
+def _fine_radius_and_half(scene: Scene) -> tuple[float, bool]:
+    fine_radius = scene.mesh.fine_radius or (1.3 * estimated_contact(scene)[0] + 2.0 * scene.mesh.size_contact)
+    return fine_radius, scene.contact.symmetry == "auto" and scene.mirror_symmetric
+
+
+def _gel_mesh(scene: Scene, fine_radius: float, half: bool):
+    """The gel's tet mesh: a graded bisection mesh for a block, pytetwild (cached on disk) for the other shapes."""
+    size_contact = scene.mesh.size_contact * scene.mesh.order       # P2 elements carry mid-edge nodes
+    if scene.gel.shape == "block":
+        spec = BlockMeshSpec(width=scene.gel.width, depth=scene.gel.depth, thickness=scene.gel.thickness,
+                             size_contact=size_contact, size_far=scene.mesh.size_far, fine_radius=fine_radius,
+                             fine_center=tuple(scene.body.center), grading=scene.mesh.grading, half=half)
+        return graded_block_mesh(spec)
+    from fem.tetmesh import TetMeshSpec, mesh_gel
+
+    spec = TetMeshSpec(size_contact=size_contact, size_far=scene.mesh.size_far, contact_radius=fine_radius,
+                       grading=scene.mesh.grading)
+    return mesh_gel(scene.gel.geometry, spec).mesh
+
+
+def preparation_key(scene: Scene) -> tuple:
+    """Hashable key of everything ``prepare`` depends on: scenes with equal keys can share one Prepared."""
+    fine_radius, half = _fine_radius_and_half(scene)
+    return (scene.gel, scene.material, scene.mesh, scene.body.center, round(fine_radius, 12), half)
 
 
 def prepare(scene: Scene) -> Prepared:
-    """Mesh the gel, assemble K and factorize it once (reused by every increment)."""
+    """Mesh the gel, assemble K and factorize it once (reused by every increment and by scenes of equal key)."""
     timings = {}
     start = time.perf_counter()
-    fine_radius = scene.mesh.fine_radius or (1.3 * estimated_contact_radius(scene) + 2.0 * scene.mesh.size_contact)
-    half = scene.contact.symmetry == "auto" and scene.mirror_symmetric
-    spec = BlockMeshSpec(width=scene.gel.width, depth=scene.gel.depth, thickness=scene.gel.thickness,
-                         size_contact=scene.mesh.size_contact * scene.mesh.order, size_far=scene.mesh.size_far,
-                         fine_radius=fine_radius, fine_center=tuple(scene.body.center), grading=scene.mesh.grading,
-                         half=half)
-    mesh = graded_block_mesh(spec)
+    fine_radius, half = _fine_radius_and_half(scene)
+    mesh = _gel_mesh(scene, fine_radius, half)
     timings["mesh"] = time.perf_counter() - start
     start = time.perf_counter()
     model = assemble_elastic_model(mesh, scene.material.E, scene.material.nu, scene.mesh.order,
@@ -187,11 +231,13 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
 
     contact_start = time.perf_counter()
     xy = model.top.positions[:, :2]
-    reach = np.hypot(*(xy - np.asarray(scene.body.center)).T)
+    centers = contact_centers(scene)
+    reach = np.min(np.linalg.norm(xy[:, None, :] - centers[None, :, :], axis=2), axis=1)
     candidate_radius = prepared.fine_radius + 3.0 * scene.mesh.size_contact
     candidates = np.flatnonzero((reach <= candidate_radius) & np.isfinite(scene.body.initial_gap(xy)))
     left_out.append(f"contact candidates: {candidates.size} of {xy.shape[0]} top points (within {candidate_radius:.3g}"
-                    f" mm of the body centre); compliance columns only for points that enter contact")
+                    f" mm of the {len(centers)} first-contact point(s)); compliance columns only for points that "
+                    f"enter contact")
     if prepared.half:
         left_out.append("the half y < 0: gel, body and loads are mirror-symmetric about y = 0 (press and shear along "
                         "x only); forces and areas are doubled in the report, fields cover y >= 0")
@@ -203,19 +249,22 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
     if not frictional:
         left_out.append("tangential contact unknowns: the path has no shear or twist load, or mu = 0")
     components = (0, 1, 2) if frictional else (2,)
-    compliance = SurfaceCompliance(model, prepared.factorization, candidates, components)
+    compliance_key = (candidates.tobytes(), components)
+    if compliance_key not in prepared.compliances:
+        prepared.compliances[compliance_key] = SurfaceCompliance(model, prepared.factorization, candidates, components)
+    compliance = prepared.compliances[compliance_key]
+    columns_before = compliance.computed_columns
     positions = model.top.positions[candidates]
-    gap0 = scene.body.initial_gap(positions[:, :2])
+    gap0 = scene.body.initial_gap(positions[:, :2]) - positions[:, 2]       # the gel's top point is at z = 0
     lever = np.column_stack([-(positions[:, 1] - scene.body.center[1]), positions[:, 0] - scene.body.center[0]])
     areas = model.top.areas[candidates]
     augmentation = _augmentation(areas, scene.material.effective_modulus)
     n = candidates.size
     state = ContactState(np.zeros(n), np.zeros((n, 2)), np.zeros((n, 3)))
-    # First Newton iterate of a force-controlled press: the depth whose geometric overlap r < sqrt(2 R d) matches the
-    # Hertz contact radius, d = a^2 / (2 R); the Hertz depth a^2 / R would start with sqrt(2) a and twice the points
-    # (each needing compliance columns).
-    seed_depth = (estimated_contact_radius(scene) ** 2 / (2.0 * scene.body.radius) if scene.body.shape == "sphere"
-                  else 1e-3 * scene.gel.thickness)
+    # First Newton iterate of a force-controlled press: half the Hertz depth, whose geometric overlap
+    # r < sqrt(2 R d) matches the Hertz contact radius; the full depth would start with sqrt(2) a and twice the
+    # points (each needing compliance columns).
+    seed_depth = 0.5 * estimated_contact(scene)[1]
     result = ContactResult(scene, model, candidates, timings=timings, mesh_info=dict(prepared.mesh_info),
                            left_out=left_out)
     controls = list(_controls(scene))
@@ -249,7 +298,7 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
         if bar is not None:
             bar.close()
         timings["contact"] = time.perf_counter() - contact_start
-        timings["compliance_columns"] = compliance.computed_columns
+        timings["compliance_columns"] = compliance.computed_columns - columns_before   # new in this solve
     return result
 
 
@@ -324,7 +373,8 @@ def _check_no_penetration(model, candidates, displacement_full, scene, depth) ->
     if others.size == 0:
         return
     xy = model.top.positions[others, :2]
-    gap = scene.body.initial_gap(xy) - depth - displacement_full[model.top.dofs[others, 2]]
+    gap = (scene.body.initial_gap(xy) - model.top.positions[others, 2] - depth
+           - displacement_full[model.top.dofs[others, 2]])
     if np.any(gap < 0):
         worst = others[np.argmin(gap)]
         raise ValueError(f"the body touches the gel outside the contact-candidate zone (point at "

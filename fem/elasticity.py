@@ -51,7 +51,7 @@ class ElasticModel:
     stiffness_fixed_free: sp.csr_matrix  # rows: base dofs, cols: free dofs (for base reactions)
     free_dofs: np.ndarray
     fixed_dofs: np.ndarray
-    top: SurfacePoints                 # contact side, z = 0
+    top: SurfacePoints                 # contact side: upward-facing boundary (z = 0 for a block)
     base: SurfacePoints                # sensor plane, z = -thickness
 
     @property
@@ -66,12 +66,21 @@ class ElasticModel:
         return full
 
 
-def _face_points(basis: Basis, order: int, z_level: float, tol: float) -> SurfacePoints:
-    """Nodal points of the boundary face at z = z_level, with tributary areas from a flat sub-triangulation."""
+def _boundary_facet_normals(mesh) -> tuple[np.ndarray, np.ndarray]:
+    """Boundary facet ids and their outward unit normals (n_facets, 3)."""
+    boundary = mesh.boundary_facets()
+    corners = mesh.p[:, mesh.facets[:, boundary]]                       # (3, 3, n_facets)
+    normals = np.cross((corners[:, 1] - corners[:, 0]).T, (corners[:, 2] - corners[:, 0]).T)
+    tets = mesh.t[:, mesh.f2t[0, boundary]]                             # (4, n_facets)
+    inner_vertex = mesh.p[:, tets].sum(axis=1) - corners.sum(axis=1)    # the tet vertex off the facet
+    inward = np.einsum("ij,ij->i", normals, (inner_vertex - corners[:, 0]).T) > 0.0
+    normals[inward] *= -1.0
+    return boundary, normals / np.linalg.norm(normals, axis=1, keepdims=True)
+
+
+def _face_points(basis: Basis, order: int, face_facets: np.ndarray) -> SurfacePoints:
+    """Nodal points of a set of boundary facets, with tributary areas from a flat sub-triangulation."""
     mesh = basis.mesh
-    facets = mesh.facets[:, mesh.boundary_facets()]
-    on_face = np.all(np.abs(mesh.p[2, facets] - z_level) < tol, axis=0)
-    face_facets = mesh.boundary_facets()[on_face]
     vertex_tri = mesh.facets[:, face_facets].T                          # (n_tri, 3) vertex ids
     component_dofs = basis.nodal_dofs                                   # (3, n_vertices)
     if order == 1:
@@ -131,8 +140,12 @@ def assemble_elastic_model(mesh, youngs_modulus: float, poissons_ratio: float, o
                                                                   if order == 2 else False)]
         fixed = np.union1d(fixed, mirror_y)
     free = np.setdiff1d(np.arange(basis.N), fixed)
-    top = _face_points(basis, order, float(mesh.p[2].max()), tol)
-    base = _face_points(basis, order, z_base, tol)
+    boundary, normals = _boundary_facet_normals(mesh)
+    on_base = np.all(np.abs(mesh.p[2, mesh.facets[:, boundary]] - z_base) < tol, axis=0)
+    # the contact side: every boundary facet facing up (n_z > 0.25, i.e. slopes below 75 deg) off the base; for a
+    # block that is its top face, for caps and bump arrays the whole upper surface
+    top = _face_points(basis, order, boundary[~on_base & (normals[:, 2] > 0.25)])
+    base = _face_points(basis, order, boundary[on_base])
     return ElasticModel(
         mesh=mesh, basis=basis, order=order,
         stiffness_free=stiffness[free][:, free].tocsr(),

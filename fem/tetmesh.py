@@ -141,24 +141,10 @@ def _sizing(geometry, spec: TetMeshSpec, scale: float = 1.0) -> _SizingField:
 
 
 def _pytetwild():
-    """pytetwild's module exposing ``tetrahedralize_mesh`` (its compiled wrapper). pytetwild 0.4.2 imports PyVista
-    on package import; without PyVista the extension is loaded directly, skipping that optional accessor."""
-    try:
-        import pytetwild
-        return pytetwild.PyfTetWildWrapper
-    except ImportError:
-        import glob
-        import importlib.machinery
-        import importlib.util
+    """pytetwild's compiled wrapper (``tetrahedralize_mesh``); pytetwild imports PyVista, a core dependency for it."""
+    import pytetwild
 
-        folder = importlib.util.find_spec("pytetwild").submodule_search_locations[0]
-        library = glob.glob(os.path.join(folder, "PyfTetWildWrapper*.*"))
-        library = [name for name in library if not name.endswith(".pyi")][0]
-        loader = importlib.machinery.ExtensionFileLoader("pytetwild.PyfTetWildWrapper", library)
-        module = importlib.util.module_from_spec(
-            importlib.util.spec_from_file_location("pytetwild.PyfTetWildWrapper", library, loader=loader))
-        loader.exec_module(module)
-        return module
+    return pytetwild.PyfTetWildWrapper
 
 
 def _versions() -> dict:
@@ -257,8 +243,10 @@ def mesh_gel(geometry, spec: TetMeshSpec, cache_dir=None, use_cache: bool = True
     """
     from skfem import MeshTet
 
+    mesh_parameters = dataclasses.asdict(spec)
+    del mesh_parameters["min_dihedral_deg"]        # the acceptance threshold does not change the mesh
     payload = {"geometry": type(geometry).__name__, "geometry_parameters": dataclasses.asdict(geometry),
-               "spec": dataclasses.asdict(spec), "versions": _versions(), "revision": MESHER_REVISION}
+               "spec": mesh_parameters, "versions": _versions(), "revision": MESHER_REVISION}
     key = cache_key(payload)
     cache = MeshCache(cache_dir)
     stored = cache.load(key) if use_cache else None

@@ -20,7 +20,7 @@ def run(out_dir, quick: bool = False) -> dict:
             continue
         start = time.perf_counter()
         try:
-            summary = available[name].run(Path(out_dir), quick=quick) or {}
+            available[name].run(Path(out_dir), quick=quick)
         except Exception as error:  # keep going: what the other studies compute must not be lost
             failures[name] = f"{type(error).__name__}: {error}"
             print(f"figures: {name} FAILED ({failures[name]})")

@@ -41,7 +41,7 @@ def edit(path, value):
     (("material", "nu"), 0.5, r"material.nu=0.5 outside allowed range"),
     (("material", "nu"), -1.0, r"material.nu=-1.0 outside allowed range"),
     (("contact", "mu"), -0.1, r"contact.mu=-0.1 outside allowed range"),
-    (("gel", "thickness"), 0.0, r"gel.thickness=0.0 outside allowed range"),
+    (("gel", "thickness"), 0.0, r"\[gel\] \(block\): thickness=0.0 outside allowed range"),
     (("gel", "shape"), "sponge", r"gel.shape='sponge' is not one of"),
     (("body", "shape"), "cube", r"body.shape='cube' is not one of"),
     (("mesh", "order"), 3, r"mesh.order=3 is not one of"),
