@@ -1,0 +1,62 @@
+"""FEM figure studies (Figs. 3, 4) in quick form, and the cap's contact radius converging toward Hertz."""
+
+import csv
+import math
+
+import numpy as np
+import pytest
+
+from contact.scene import BodySpec, ContactSpec, GelSpec, Load, LoadKind, Material, MeshSettings, Scene
+from contact.solver import solve_scene
+from contact.theory import hertz
+
+
+def read_rows(path):
+    with open(path) as stream:
+        return list(csv.DictReader(stream))
+
+
+def test_fig3_quick_follows_ciavarella_jager(tmp_path):
+    from studies import fig3
+
+    summary = fig3.run(tmp_path, quick=True)
+    rows = read_rows(tmp_path / "fig3.csv")
+    assert {"case", "load_ratio", "stick_ratio_fem", "stick_ratio_theory", "error"} <= set(rows[0])
+    for row in rows:
+        assert float(row["error"]) == pytest.approx(float(row["stick_ratio_fem"]) - float(row["stick_ratio_theory"]))
+    # quick mesh h = a/5: the stick edge is known to +-h/2 = 0.1 a (THEORY.md sec. 6), checked up to Q/(mu P) = 0.9
+    assert summary["max_error"] < 0.1 + 0.01
+    # the flat face keeps the stick zone: at Q/(mu P) = 0.9 more stays stuck the larger b/a is
+    at_09 = {float(r["b_over_a"]): float(r["stick_ratio_fem"]) for r in rows if float(r["load_ratio"]) == 0.9}
+    assert at_09[0.0] < at_09[0.5] < at_09[0.9]
+
+
+def test_fig4_quick_pad_drops_late_and_cap_follows_mindlin(tmp_path):
+    from studies import fig4
+
+    summary = fig4.run(tmp_path, quick=True)
+    rows = read_rows(tmp_path / "fig4.csv")
+    pad = {float(r["load_ratio"]): float(r["stick_ratio_fem"]) for r in rows if r["case"] == "flat pad"}
+    cap = {float(r["load_ratio"]): float(r["stick_ratio_fem"]) for r in rows if r["case"] == "spherical cap"}
+    # cap at h = a/5: +-0.1 quantisation (THEORY.md sec. 6)
+    assert summary["max_error"] < 0.1 + 0.01
+    # the pad stays almost fully stuck at moderate load and loses most of its stick area only near gross slip
+    assert pad[0.3] > 0.95 and pad[0.3] > cap[0.3]
+    assert pad[0.7] - pad[0.95] > 2 * (cap[0.7] - cap[0.95])
+    assert (tmp_path / "fig4.png").exists()
+
+
+def plate_on_cap(size_contact):
+    gel = GelSpec("cap", (("width", 20.0), ("depth", 20.0), ("base_thickness", 8.0), ("cap_radius", 4.0),
+                          ("sphere_radius", 10.0)))
+    return Scene(name="cap", gel=gel, material=Material(1.0, 0.3), body=BodySpec("plane"),
+                 contact=ContactSpec(mu=0.5), mesh=MeshSettings(size_contact=size_contact, size_far=3.0),
+                 loads=(Load(LoadKind.PRESS, "force", (0.2,)),))
+
+
+def test_cap_contact_radius_converges_toward_hertz():
+    reference = float(hertz(0.2, 10.0, 1.0 / (1 - 0.3**2)).contact_radius)
+    errors = [abs(solve_scene(plate_on_cap(h)).increments[0].contact_radius - reference) for h in (0.6, 0.3, 0.15)]
+    # the error falls with h and ends within h/2 (edge quantisation) plus 3 % (finite cap and base, THEORY.md 6.4)
+    assert errors[2] < errors[0]
+    assert errors[2] < 0.15 / 2 + 0.03 * reference
