@@ -160,6 +160,7 @@ class MeshSettings:
     order: int = 1
     fine_radius: float | None = None
     grading: float = 0.5
+    size_base: float | None = None    # element size on the sensor plane [mm] (curved gels; None: size_far)
 
     def __post_init__(self):
         check_positive("mesh.size_contact", self.size_contact, "mm")
@@ -168,6 +169,8 @@ class MeshSettings:
             raise ValueError(f"mesh.order={self.order!r} is not one of [1, 2]")
         if self.fine_radius is not None:
             check_positive("mesh.fine_radius", self.fine_radius, "mm")
+        if self.size_base is not None:
+            check_positive("mesh.size_base", self.size_base, "mm")
         check_positive("mesh.grading", self.grading)
 
 

@@ -39,6 +39,7 @@ class Increment:
     iterations: int
     residual: float
     seconds: float
+    substeps: int = 1                 # > 1 when Newton needed the increment split (automatic bisection)
     # fields (not written to result.json): per candidate point and per base point
     status: np.ndarray = field(repr=False, default=None)
     pressure: np.ndarray = field(repr=False, default=None)
@@ -49,7 +50,7 @@ class Increment:
 
     SCALARS = ("load_kind", "normal_force", "tangential_force", "torque", "depth", "shift", "angle", "contact_area",
                "stick_area", "contact_radius", "stick_radius", "stick_ratio", "max_pressure", "iterations",
-               "residual", "seconds")
+               "residual", "seconds", "substeps")
 
     def summary(self) -> dict:
         return {name: getattr(self, name) for name in self.SCALARS}
@@ -153,7 +154,7 @@ def _gel_mesh(scene: Scene, fine_radius: float, half: bool):
     from fem.tetmesh import TetMeshSpec, mesh_gel
 
     spec = TetMeshSpec(size_contact=size_contact, size_far=scene.mesh.size_far, contact_radius=fine_radius,
-                       grading=scene.mesh.grading)
+                       grading=scene.mesh.grading, size_base=scene.mesh.size_base)
     return mesh_gel(scene.gel.geometry, spec).mesh
 
 
@@ -279,16 +280,20 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
             control = _scaled(control, 1.0 / multiplicity)
             _check_feasible(control, state, scene.contact.mu, lever)
             mu = scene.contact.mu if friction_on else 0.0
+
+            def solve(start_state, target):
+                return solve_increment(compliance, gap0, lever, augmentation, mu, start_state, target,
+                                       seed_depth=seed_depth, tolerance=scene.contact.tolerance,
+                                       max_iterations=scene.contact.max_iterations, mirror_y=prepared.half)
+
             try:
-                state, iterations, history = solve_increment(
-                    compliance, gap0, lever, augmentation, mu, state, control, seed_depth=seed_depth,
-                    tolerance=scene.contact.tolerance, max_iterations=scene.contact.max_iterations,
-                    mirror_y=prepared.half)
+                state, iterations, history, substeps = _solve_with_substeps(solve, state, control, lever)
             except ContactNotConverged as error:
                 raise PathNotCompleted(f"increment {len(result.increments) + 1} ({kind}): {error}", result) from error
             result.increments.append(_record(kind, state, iterations, history, model, prepared.factorization,
                                              compliance, candidates, areas, lever, scene,
                                              time.perf_counter() - step_start, multiplicity))
+            result.increments[-1].substeps = substeps
             if bar is not None:
                 bar.update(1)
     except PathNotCompleted as error:
@@ -300,6 +305,44 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
         timings["contact"] = time.perf_counter() - contact_start
         timings["compliance_columns"] = compliance.computed_columns - columns_before   # new in this solve
     return result
+
+
+MAX_BISECTIONS = 6     # an increment may be split into up to 2^6 = 64 sub-steps
+
+
+def _interpolated(control: BodyControl, state: ContactState, lever: np.ndarray, fraction: float) -> BodyControl:
+    """The targets a ``fraction`` of the way from the converged ``state`` to ``control`` (same control modes)."""
+    import dataclasses
+
+    def between(start, end):
+        if end is None:
+            return None
+        if isinstance(end, tuple):
+            return tuple(float(a + fraction * (b - a)) for a, b in zip(start, end))
+        return float(start + fraction * (end - start))
+
+    return dataclasses.replace(
+        control, depth=between(state.depth, control.depth),
+        normal_force=between(float(state.normal_force.sum()), control.normal_force),
+        shift=between(tuple(state.shift), control.shift),
+        tangential_force=between(tuple(state.tangential_force.sum(axis=0)), control.tangential_force),
+        angle=between(state.angle, control.angle),
+        torque=between(float((lever * state.tangential_force).sum()), control.torque))
+
+
+def _solve_with_substeps(solve, state: ContactState, control: BodyControl, lever: np.ndarray, depth: int = 0):
+    """Solve an increment; if Newton does not converge, split it in two halves (recursively, friction follows the
+    finer path), up to MAX_BISECTIONS levels. Returns (state, iterations, history, sub-steps)."""
+    try:
+        new_state, iterations, history = solve(state, control)
+        return new_state, iterations, history, 1
+    except ContactNotConverged:
+        if depth >= MAX_BISECTIONS or not np.any(state.normal_force > 0):
+            raise
+    middle, it1, _, n1 = _solve_with_substeps(solve, state, _interpolated(control, state, lever, 0.5), lever,
+                                              depth + 1)
+    final, it2, history, n2 = _solve_with_substeps(solve, middle, control, lever, depth + 1)
+    return final, it1 + it2, history, n1 + n2
 
 
 def _scaled(control: BodyControl, factor: float) -> BodyControl:

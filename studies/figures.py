@@ -6,7 +6,7 @@ import time
 from pathlib import Path
 
 NAME = "figures"
-FIGURE_STUDIES = ("fig2b", "fig3b", "torsion-theory", "fig3", "fig4", "convergence")
+FIGURE_STUDIES = ("fig2b", "fig3b", "torsion-theory", "fig3", "fig4", "fig6", "fig9", "convergence")
 
 
 def run(out_dir, quick: bool = False) -> dict:

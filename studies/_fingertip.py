@@ -1,0 +1,75 @@
+"""The virtual bench of Figs. 6 and 9: an n x n hemisphere-array fingertip under a rigid plate, read by the sensor.
+
+The FEM gives the pressure on the gel's base (the sensor plane); controller.sensor integrates it over the nodes'
+cells and controller.estimator turns the readings into per-bump shear displacements and the eq. 9 rigid transform
+- the same code the closed loop runs on the reduced model.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+FOOTPRINT = 40.0          # mm, square fingertip (paper sec. IV-B)
+BASE_THICKNESS = 3.0      # mm, gel layer between the bumps and the sensor
+BUMP_FILL = 0.35          # bump radius / pitch (pitch = FOOTPRINT / n), so that the bumps never touch
+YOUNGS_MODULUS = 0.3      # MPa, soft urethane gel
+POISSONS_RATIO = 0.45
+FRICTION = 1.0
+NORMAL_FORCE = 2.0        # N, the plate's press, shared by all bumps
+
+
+def fingertip_gel(n: int):
+    """GelSpec of an n x n hemisphere array on the 40 x 40 mm base."""
+    from contact.scene import GelSpec
+
+    pitch = FOOTPRINT / n
+    return GelSpec("array", (("rows", n), ("cols", n), ("bump_radius", BUMP_FILL * pitch), ("pitch", pitch),
+                             ("base_width", FOOTPRINT), ("base_depth", FOOTPRINT),
+                             ("base_thickness", BASE_THICKNESS)))
+
+
+def bench_scene(n: int, kind: str, values, size_contact: float, size_base: float):
+    """Plate pressed with NORMAL_FORCE, then shifted along x (kind 'shift', mm) or twisted (kind 'twist', rad)."""
+    from contact.scene import BodySpec, ContactSpec, Load, LoadKind, Material, MeshSettings, Scene
+
+    motion = Load(LoadKind.SHEAR, "displacement", tuple(values)) if kind == "shift" else \
+        Load(LoadKind.TWIST, "displacement", tuple(values))
+    return Scene(name=f"fingertip_{n}x{n}_{kind}", gel=fingertip_gel(n),
+                 material=Material(YOUNGS_MODULUS, POISSONS_RATIO), body=BodySpec("plane"),
+                 contact=ContactSpec(mu=FRICTION),
+                 mesh=MeshSettings(size_contact=size_contact, size_far=3.0, size_base=size_base),
+                 loads=(Load(LoadKind.PRESS, "force", (NORMAL_FORCE,)), motion))
+
+
+def sensor_readings(result, array) -> np.ndarray:
+    """Readings (t, ny, nx) [N] of ``array`` for every increment of an FEM result (noise-free)."""
+    from controller.sensor import PressureField, cell_force_operator, sample
+
+    base = result.model.base
+    pressure = np.stack([increment.base_pressure for increment in result.increments])      # (t, n_base)
+    field = PressureField(base.positions[:, :2], base.triangles, pressure)
+    operator = cell_force_operator(field.positions, field.triangles, array)
+    return sample(field, array, operator=operator)
+
+
+def sensor_array(pitch: float):
+    """A node grid of the given pitch [mm] covering the 40 mm footprint."""
+    from controller.sensor import SensorArray
+
+    count = int(round(FOOTPRINT / pitch))
+    return SensorArray(pitch=pitch, node_counts=(count, count))
+
+
+def bump_layout(n: int):
+    from controller.estimator import BumpLayout
+
+    return BumpLayout.grid((n, n), FOOTPRINT / n)
+
+
+def shifts_of(result, array, layout):
+    """Per-bump CoP shifts (t, k, 2) [mm] relative to the pressed, unsheared first increment, and the reference."""
+    from controller.estimator import BumpReference, estimate_slip
+
+    readings = sensor_readings(result, array)
+    reference = BumpReference.from_readings(readings[:1], array, layout)
+    return readings, reference, estimate_slip(readings, array, layout, reference).cop_shift

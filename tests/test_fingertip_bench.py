@@ -1,0 +1,43 @@
+"""Virtual benches of Figs. 6 and 9 (quick): FEM base pressure -> sensor -> estimator, against the applied motion."""
+
+import csv
+
+import numpy as np
+import pytest
+
+
+def test_sensor_conserves_the_fem_base_force():
+    from contact.solver import solve_scene
+    from studies._fingertip import bench_scene, sensor_array, sensor_readings
+
+    result = solve_scene(bench_scene(1, "shift", (0.1,), 0.8, 2.0))
+    readings = sensor_readings(result, sensor_array(1.0))
+    for increment, frame in zip(result.increments, readings):
+        # the 1 mm array covers the whole 40 mm base and the clipping integration is exact for the P1 field, so the
+        # nodes carry the FEM's base reaction, which balances the plate's normal force (1e-6: solver tolerances)
+        assert frame.sum() == pytest.approx(increment.normal_force, rel=1e-6)
+
+
+def test_fig6_quick(tmp_path):
+    from studies import fig6
+
+    fig6.run(tmp_path, quick=True)
+    with open(tmp_path / "fig6.csv") as stream:
+        rows = list(csv.DictReader(stream))
+    assert {(r["case"], float(r["sensor_pitch"])) for r in rows} == {("1x1", 1.0), ("1x1", 3.0), ("3x3", 1.0),
+                                                                      ("3x3", 3.0)}
+    for row in rows:
+        # the calibrated gain maps the base CoP shift onto the plate shift: a good fit, a finite error
+        assert float(row["calibration_r_squared"]) > 0.9
+        assert 0.0 <= float(row["error_percent"]) < 50.0
+
+
+def test_fig9_quick_recovers_translation_and_rotation(tmp_path):
+    from studies import fig9
+
+    summary = fig9.run(tmp_path, quick=True)
+    fits = summary["fits"]
+    # strong linear correlation, as the paper reports (R^2 > 0.99), and errors of the paper's order (15 %, 3 %)
+    assert fits["translation"]["r_squared"] > 0.99 and fits["rotation"]["r_squared"] > 0.99
+    assert fits["translation"]["mean_relative_error"] < 0.2
+    assert fits["rotation"]["mean_relative_error"] < 0.2
