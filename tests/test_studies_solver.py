@@ -68,17 +68,17 @@ def test_run_writes_json_csv_and_vtu(tmp_path):
     assert set(np.unique(state)) <= {-1.0, 0.0, 1.0, 2.0} and np.any(state == 2.0) and np.any(state == 1.0)
 
 
-def test_failed_increment_keeps_the_converged_ones_on_disk(tmp_path):
+def test_failed_increment_keeps_the_converged_ones_on_disk(tmp_path, failing_after_press):
     from contact.solver import PathNotCompleted
     from studies.__main__ import main
 
     scene = tmp_path / "small.toml"
-    scene.write_text(SMALL_SCENE.format(contact_extra="max_iterations = 6"))
+    scene.write_text(SMALL_SCENE.format(contact_extra=""))
     with pytest.raises(PathNotCompleted):
         main(["run", str(scene), "--out", str(tmp_path / "out"), "--quiet"])
     document = json.loads((tmp_path / "out" / "result.json").read_text())
     assert document["error"] and "residual history" in document["error"]
-    assert len(document["increments"]) >= 1
+    assert [inc["load_kind"] for inc in document["increments"]] == ["press"]
 
 
 def test_half_model_matches_the_full_model():
