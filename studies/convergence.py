@@ -17,6 +17,7 @@ from studies._output import save_figure, write_csv_atomic
 NAME = "convergence"
 SCENE = Path(__file__).parent / "scenes" / "hcm1.toml"
 TARGET_STICK_RATIO_ERROR = 0.02         # the solver issue's target for the HCM-1 path
+KNEE_FACTOR = 1.15                      # knee: cheapest mesh whose error is within 15 % of the best one
 
 
 def _cases(quick: bool) -> list[dict]:
@@ -65,7 +66,7 @@ def solve_case(size_contact: float, order: int, n_shear: int) -> dict:
 
 
 def run(out_dir, quick: bool = False) -> dict:
-    """Run every case, write convergence.csv / .png / .pdf, and mark the cheapest P1 mesh within the target."""
+    """Run every case, write convergence.csv / .png / .pdf, and mark the knee of the P1 error-time curve."""
     from tqdm import tqdm
 
     out_dir = Path(out_dir)
@@ -73,15 +74,16 @@ def run(out_dir, quick: bool = False) -> dict:
     for case in tqdm(_cases(quick), desc=NAME, unit="case"):
         rows.append({**case, **solve_case(**{k: case[k] for k in ("size_contact", "order", "n_shear")})})
         write_csv_atomic(out_dir / f"{NAME}.csv", rows)          # keep what is done if a later case fails
-    within = [r for r in rows if r["study"] == "element size (P1)" and r["stick_ratio_error"] <= TARGET_STICK_RATIO_ERROR]
-    knee = min(within, key=lambda r: r["wall_time"]) if within else None
+    sizes = [r for r in rows if r["study"] == "element size (P1)"]
+    best = min(r["stick_ratio_error"] for r in sizes)
+    # the knee: the cheapest P1 mesh within 15 % of the best error seen (finer meshes buy little more)
+    knee = min((r for r in sizes if r["stick_ratio_error"] <= KNEE_FACTOR * best), key=lambda r: r["wall_time"])
     for row in rows:
         row["knee"] = row is knee
     write_csv_atomic(out_dir / f"{NAME}.csv", rows)
     save_figure(_plot(rows, knee), out_dir, NAME)
-    if knee:
-        print(f"{NAME}: cheapest P1 mesh with stick-ratio error <= {TARGET_STICK_RATIO_ERROR}: size_contact = "
-              f"{knee['size_contact']} mm ({knee['wall_time']:.1f} s, error {knee['stick_ratio_error']:.4f})")
+    print(f"{NAME}: knee (cheapest P1 mesh within {KNEE_FACTOR:.2f}x of the best stick-ratio error): size_contact = "
+          f"{knee['size_contact']} mm ({knee['wall_time']:.1f} s, error {knee['stick_ratio_error']:.4f})")
     finest = min((r for r in rows if r["study"] == "element size (P1)"), key=lambda r: r["size_contact"])
     return {"max_error": finest["stick_ratio_error"],
             "error_meaning": f"stick-ratio error against Cattaneo-Mindlin on the finest P1 mesh, "
@@ -108,7 +110,8 @@ def _plot(rows: list[dict], knee: dict | None):
         if key == "stick_ratio_error":
             axis.axhline(TARGET_STICK_RATIO_ERROR, color="grey", ls=":", label=f"target {TARGET_STICK_RATIO_ERROR}")
             if knee:
-                axis.plot(knee["wall_time"], knee["stick_ratio_error"], "r*", ms=16, label="knee: cheapest within target")
+                axis.plot(knee["wall_time"], knee["stick_ratio_error"], "r*", ms=16,
+                          label=f"knee: cheapest within {KNEE_FACTOR:.2f}x best")
         axis.set_xlabel("wall time [s]")
         axis.set_ylabel(label)
         axis.grid(True, which="both", alpha=0.3)

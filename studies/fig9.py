@@ -40,6 +40,7 @@ def run(out_dir, quick: bool = False) -> dict:
     truth = np.zeros_like(cop_shift)
     truth[1:, :, 0] = np.asarray(shifts)[:, None]
     calibration = calibrate_gain(cop_shift[1:3], truth[1:3])        # the two smallest shifts; all are estimated
+    _store_calibration(out_dir / "fingertip_3x3_calibration.json", translation.scene, array, calibration)
     translated = estimate_slip(readings, array, layout, reference, calibration)
     twist_readings, twist_reference, _ = shifts_of(rotation, array, layout)
     twisted = estimate_slip(twist_readings, array, layout, twist_reference, calibration)
@@ -61,6 +62,17 @@ def run(out_dir, quick: bool = False) -> dict:
     return {"max_error": max(fit["mean_relative_error"] for fit in fits.values()),
             "error_meaning": "mean relative estimation error (the larger of translation and rotation)",
             "fits": fits}
+
+
+def _store_calibration(path: Path, scene, array, calibration) -> None:
+    """The estimator calibration stored with the fingertip design it was fitted on (JSON)."""
+    from studies._output import write_json_atomic
+
+    write_json_atomic(path, {"design": {"gel": {"shape": scene.gel.shape, **dict(scene.gel.parameters)},
+                                        "E": scene.material.E, "nu": scene.material.nu, "mu": scene.contact.mu,
+                                        "sensor_pitch": array.pitch, "sensor_nodes": list(array.node_counts)},
+                             "calibration": calibration.to_dict(),
+                             "fitted_on": "FEM plate shifts (the two smallest) of the fig9 translation run"})
 
 
 def _regression(applied, estimated) -> dict:

@@ -37,6 +37,13 @@ def test_fig9_quick_recovers_translation_and_rotation(tmp_path):
 
     summary = fig9.run(tmp_path, quick=True)
     fits = summary["fits"]
+    import json
+
+    from controller.calibration import EstimatorCalibration
+
+    stored = json.loads((tmp_path / "fingertip_3x3_calibration.json").read_text())
+    assert stored["design"]["gel"]["rows"] == 3
+    assert EstimatorCalibration.from_dict(stored["calibration"]).gain > 0
     # strong linear correlation, as the paper reports (R^2 > 0.99), and errors of the paper's order (15 %, 3 %)
     assert fits["translation"]["r_squared"] > 0.99 and fits["rotation"]["r_squared"] > 0.99
     assert fits["translation"]["mean_relative_error"] < 0.2
