@@ -108,3 +108,14 @@ def test_convergence_study_quick(tmp_path):
     by_increments = {int(r["n_shear"]): float(r["final_stick_ratio_error"]) for r in rows if r["study"] == "shear increments"}
     assert by_increments[1] == pytest.approx(by_increments[5], abs=0.02)
     assert np.isfinite(summary["max_error"])
+
+
+def test_benchmark_quick_writes_medians(tmp_path):
+    from studies import benchmark
+
+    benchmark.run(tmp_path, quick=True)
+    medians = json.loads((tmp_path / "benchmark.json").read_text())
+    # the contact path contains the compliance columns and Newton on top of the shared factorization
+    assert medians["contact_path"] > 0 and medians["linear_solve"] > 0
+    assert medians["ratio_contact_to_linear"] == pytest.approx(medians["contact_path"] / medians["linear_solve"],
+                                                               rel=1e-9)
