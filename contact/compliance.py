@@ -63,17 +63,19 @@ class SurfaceCompliance:
             grown = np.empty((self.size, max(needed, 2 * self._store.shape[1], 64)))
             grown[:, :self._count] = self._store[:, :self._count]
             self._store = grown
-        free = ~self.constrained[missing]
-        rhs = np.zeros((self.factorization.size, int(free.sum())))
-        rhs[self.rows[missing[free]], np.arange(rhs.shape[1])] = 1.0
+        free = np.flatnonzero(~self.constrained[missing])
         block = np.zeros((self.size, missing.size))
-        if rhs.shape[1]:
-            solution = self.factorization.solve(rhs)
-            block[np.ix_(~self.constrained, np.flatnonzero(free))] = solution[self.rows[~self.constrained]]
+        kept_rows = self.rows[~self.constrained]
+        # unit right-hand sides in chunks: the dense (n_free x chunk) blocks bound the memory, not the column count
+        for start in range(0, free.size, self.factorization.chunk):
+            part = free[start:start + self.factorization.chunk]
+            rhs = np.zeros((self.factorization.size, part.size))
+            rhs[self.rows[missing[part]], np.arange(part.size)] = 1.0
+            block[np.ix_(~self.constrained, part)] = self.factorization.solve(rhs)[kept_rows]
         self._store[:, self._count:needed] = block
         self._slot[missing] = np.arange(self._count, needed)
         self._count = needed
-        self.solves += int(free.sum())
+        self.solves += int(free.size)
 
     def block(self, row_index: np.ndarray | slice, columns: np.ndarray) -> np.ndarray:
         """C[rows, columns] (computing missing columns first); rows default to all candidate dofs."""
