@@ -119,3 +119,14 @@ def test_benchmark_quick_writes_medians(tmp_path):
     assert medians["contact_path"] > 0 and medians["linear_solve"] > 0
     assert medians["ratio_contact_to_linear"] == pytest.approx(medians["contact_path"] / medians["linear_solve"],
                                                                rel=1e-9)
+
+
+def test_every_study_module_imports():
+    import warnings
+
+    from studies import find_studies
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")            # the registry warns and skips a module that does not import
+        names = set(find_studies())
+    assert {"fig2b", "fig3b", "torsion-theory", "fig3", "fig4", "fig6", "fig9", "convergence", "run"} <= names
