@@ -1,6 +1,7 @@
 """Test fixture: closed-form contact of one Hertz fingertip (hemisphere) under a tangential force and a moment.
 
-Not part of the package (contact.reduced comes later): the plant the grasp controller is tested against.
+Not part of the package: the single-hemisphere plant the grasp controller is tested against (contact.reduced models the
+3x3 array fingertip of the closed loop and shares its Lubkin table).
 
 Model (contact.theory, THEORY.md secs. 3.2 and 4), rigid object on an elastic hemisphere (R, E, nu):
     contact radius  a(P) from Hertz with E* = E / (1 - nu^2),
@@ -11,9 +12,8 @@ either mode alone). Gross slip: Q >= mu P or T >= (3 pi / 16) mu P a; the plant 
 ``SLIP_DISPLACEMENT_FACTOR`` times the reference scale of the mode, which keeps growing load ratios visible to the
 controller without an infinite value.
 
-The Lubkin twist is tabulated once in dimensionless form, theta G a^2 / (mu P) against T / (mu P a), from
-``contact.theory.lubkin_torque_twist`` (parametric in the stick ratio) and interpolated: ``lubkin_twist`` costs
-milliseconds per call, too slow for a 1 kHz loop over seconds.
+The Lubkin twist is tabulated once in dimensionless form (``contact.reduced.normalized_lubkin_twist``, shared with
+the reduced array model): ``lubkin_twist`` costs milliseconds per call, too slow for a 1 kHz loop over seconds.
 """
 
 from __future__ import annotations
@@ -23,23 +23,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from contact.theory import effective_modulus, hertz, lubkin_torque_twist, mindlin_shift, shear_modulus
+from contact.reduced import normalized_lubkin_torque, normalized_lubkin_twist
+from contact.reduced._bumps import _TORQUE_RATIOS
+from contact.theory import effective_modulus, hertz, mindlin_shift, shear_modulus
 
 SLIP_TORQUE_RATIO = 3.0 * math.pi / 16.0          # full-slip torque / (mu P a), Lubkin
 SLIP_DISPLACEMENT_FACTOR = 3.0                     # reported displacement in gross slip / slip scale [-]
 
-_STICK_RATIOS = np.concatenate([np.linspace(1.0, 0.05, 400), np.geomspace(0.05, 1e-4, 60)[1:]])
-_TORQUE_RATIOS, _TWISTS = lubkin_torque_twist(_STICK_RATIOS, 1.0, 1.0, 1.0, 1.0)   # increasing in both
-
-
-def normalized_lubkin_twist(torque_ratio):
-    """theta G a^2 / (mu P) [-] at T / (mu P a) in [0, 3 pi / 16) (interpolated Lubkin curve; float or array)."""
-    return np.interp(torque_ratio, _TORQUE_RATIOS, _TWISTS)
-
-
-def normalized_lubkin_torque(twist):
-    """Inverse of ``normalized_lubkin_twist``: T / (mu P a) at theta G a^2 / (mu P) [-]."""
-    return np.interp(twist, _TWISTS, _TORQUE_RATIOS)
+__all__ = ["SLIP_TORQUE_RATIO", "HertzFingertip", "ClosedFormContactPlant", "normalized_lubkin_twist",
+           "normalized_lubkin_torque", "slip_factors"]
 
 
 @dataclass(frozen=True)
