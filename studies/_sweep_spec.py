@@ -1,0 +1,332 @@
+"""Sweep files: a base scene, parameter axes on dotted scene keys and the quantities to record; validated on entry.
+
+A sweep file (TOML)::
+
+    name = "stick-ratio-E-mu"
+    scene = "../scenes/hcm1.toml"            # base scene, relative to this file; or an inline [scene] table
+    outputs = ["stick_ratio@-1", "max_pressure@0", "contact_radius@*", "iterations"]
+
+    [grid]                                   # cartesian product of the axes
+    "material.E" = [0.5, 1.0, 2.0]
+
+    [list]                                   # zipped: equal lengths, the i-th values form one point
+    "contact.mu" = [0.3, 0.5]
+    "load.1.force" = [0.03, 0.05]            # [[load]] tables by index from 0
+
+Cases are the product of the grid with the zipped list (either may be absent, not both). An axis key is a dotted
+path into the scene document: ``SECTION.KEY`` (material, contact, mesh, body, gel) or ``load.INDEX.KEY``; each case
+must give a valid scene (``contact.scene_from_dict``). Outputs: ``QUANTITY@INDEX`` for a per-increment quantity at
+increment INDEX (from 0; negative counts from the end; ``*`` = every increment, one column each), or a case-level
+quantity without ``@``. The column of an output is its text as written.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import hashlib
+import itertools
+import json
+import math
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:  # pragma: no cover
+    import tomli as tomllib
+
+__all__ = ["Output", "Case", "SweepSpec", "load_sweep", "sweep_from_dict", "increment_quantities",
+           "CASE_QUANTITIES", "DERIVED_QUANTITIES", "set_dotted"]
+
+TOP_KEYS = ("name", "description", "scene", "outputs", "grid", "list")
+SCENE_SECTIONS = ("gel", "material", "body", "contact", "mesh", "load")
+QUICK_SIZE_CONTACT = 0.3            # mm; --quick coarsens the base scene's contact mesh to at least this (CI size)
+
+# per-increment quantities computed by the sweep from the increment and the scene
+DERIVED_QUANTITIES = {
+    "load_ratio": "|Q| / (mu P), tangential load ratio [-]",
+    "torque_ratio": "|T| / (mu P a), torsional load ratio with the FEM contact radius [-]",
+}
+# case-level quantities (no @INDEX)
+CASE_QUANTITIES = {
+    "wall_time": "seconds spent on the case, its share of prepare() included [s]",
+    "prepare_time": "seconds of prepare() paid by this case (0 when it reused its group's) [s]",
+    "solve_time": "seconds of solve_scene() [s]",
+    "iterations": "Newton iterations summed over the increments [-]",
+    "increments_done": "converged increments [-]",
+    "dofs": "degrees of freedom of the mesh [-]",
+    "elements": "tetrahedra [-]",
+    "min_dihedral_deg": "smallest dihedral angle of the mesh [deg]",
+    "compliance_columns": "surface compliance columns computed in this solve [-]",
+}
+
+
+def increment_quantities() -> tuple[str, ...]:
+    """Names of the per-increment quantities: Increment.summary() with [x, y] vectors split, and the derived ones."""
+    from contact.solver import Increment
+
+    types = {f.name: str(f.type) for f in dataclasses.fields(Increment)}
+    names = []
+    for name in Increment.SCALARS:
+        names.extend([f"{name}_x", f"{name}_y"] if types[name].startswith("list") else [name])
+    return tuple(names) + tuple(DERIVED_QUANTITIES)
+
+
+@dataclass(frozen=True)
+class Output:
+    """One recorded quantity; ``increment`` is None for a case-level quantity. ``text`` is the column name."""
+
+    text: str
+    quantity: str
+    increment: int | None = None
+
+
+@dataclass(frozen=True)
+class Case:
+    """One point of the sweep: its parameters (axis key -> value), the full scene document, its id and Scene."""
+
+    case_id: str
+    parameters: tuple[tuple[str, object], ...]
+    document: dict = field(compare=False, repr=False)
+    scene: object = field(compare=False, repr=False)
+
+    @property
+    def n_increments(self) -> int:
+        return sum(len(load.values) for load in self.scene.loads)
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """A validated sweep: axes, outputs (``*`` expanded) and the cases in order."""
+
+    name: str
+    grid: tuple[tuple[str, tuple], ...]
+    zipped: tuple[tuple[str, tuple], ...]
+    outputs: tuple[Output, ...]
+    cases: tuple[Case, ...]
+    base_document: dict = field(compare=False, repr=False)
+    source: str = ""
+
+    @property
+    def axes(self) -> tuple[str, ...]:
+        return tuple(key for key, _ in self.grid + self.zipped)
+
+    @property
+    def zipped_axes(self) -> tuple[str, ...]:
+        return tuple(key for key, _ in self.zipped)
+
+
+def set_dotted(document: dict, key: str, value) -> None:
+    """Set ``document[a][b]...`` from the dotted ``key`` ("material.E", "load.1.force"); lists are indexed by number."""
+    parts = key.split(".")
+    if len(parts) < 2 or parts[0] not in SCENE_SECTIONS or not all(parts):
+        raise ValueError(f"axis {key!r}: a key is SECTION.KEY with SECTION one of {list(SCENE_SECTIONS)}, or "
+                         f"load.INDEX.KEY")
+    node = document
+    for depth, part in enumerate(parts[:-1]):
+        where = ".".join(parts[: depth + 1])
+        if isinstance(node, list):
+            if not part.isdigit() or int(part) >= len(node):
+                raise ValueError(f"axis {key!r}: {where!r} is not an index of the scene's {len(node)} "
+                                 f"[[{parts[depth - 1]}]] table(s) (0 to {len(node) - 1})")
+            node = node[int(part)]
+        else:
+            node = node.setdefault(part, {})
+        if not isinstance(node, (dict, list)):
+            raise ValueError(f"axis {key!r}: {where!r} is a value ({node!r}), not a table")
+    if not isinstance(node, dict):
+        raise ValueError(f"axis {key!r}: give a key inside one [[{parts[0]}]] table, e.g. {parts[0]}.0.{parts[-1]}")
+    node[parts[-1]] = value
+
+
+def _read_toml(path: Path, what: str) -> dict:
+    with path.open("rb") as stream:
+        try:
+            return tomllib.load(stream)
+        except tomllib.TOMLDecodeError as error:
+            raise ValueError(f"{what}: not valid TOML ({error})") from None
+
+
+def load_sweep(path: str | Path, quick: bool = False) -> SweepSpec:
+    """Read and validate a sweep file; every case's scene is built here, so a bad file fails before any solve."""
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"sweep file {str(path)!r} does not exist")
+    return sweep_from_dict(_read_toml(path, str(path)), base_dir=path.parent, quick=quick, source=str(path))
+
+
+def sweep_from_dict(data: dict, base_dir: str | Path = ".", quick: bool = False, source: str = "") -> SweepSpec:
+    """SweepSpec from a parsed sweep document; raises ValueError naming the offending key."""
+    unknown = sorted(set(data) - set(TOP_KEYS))
+    if unknown:
+        raise ValueError(f"unknown top-level key(s) {unknown} in the sweep file; allowed: {list(TOP_KEYS)}")
+    name = data.get("name", Path(source).stem if source else "sweep")
+    if not isinstance(name, str) or not name:
+        raise ValueError(f"name={name!r} must be a non-empty string")
+    base = _base_document(data.get("scene"), Path(base_dir))
+    if quick:
+        mesh = base.setdefault("mesh", {})
+        mesh["size_contact"] = max(float(mesh.get("size_contact", 0.0)), QUICK_SIZE_CONTACT)
+    grid = _axes(data.get("grid", {}), "grid")
+    zipped = _axes(data.get("list", {}), "list")
+    if not grid and not zipped:
+        raise ValueError("the sweep has no axes: give a [grid] and/or a [list] table of dotted keys")
+    both = sorted({k for k, _ in grid} & {k for k, _ in zipped})
+    if both:
+        raise ValueError(f"axis {both[0]!r} is in both [grid] and [list]")
+    lengths = {key: len(values) for key, values in zipped}
+    if len(set(lengths.values())) > 1:
+        raise ValueError(f"[list] axes are zipped and need equal lengths, got {lengths}")
+    parsed_outputs = _parse_outputs(data.get("outputs"))
+    cases = _build_cases(base, grid, zipped)
+    return SweepSpec(name=name, grid=grid, zipped=zipped, outputs=_expand_outputs(parsed_outputs, cases),
+                     cases=tuple(cases), base_document=base, source=source)
+
+
+def _base_document(scene, base_dir: Path) -> dict:
+    """The base scene document: a path relative to the sweep file, or an inline table; validated as a scene."""
+    from contact.scene import scene_from_dict
+
+    if scene is None:
+        raise ValueError("scene is missing: give scene = \"path/to/scene.toml\" (relative to the sweep file) or an "
+                         "inline [scene] table")
+    if isinstance(scene, str):
+        path = (base_dir / scene).resolve()
+        if not path.is_file():
+            raise ValueError(f"scene={scene!r}: no such file {str(path)!r}")
+        document = _read_toml(path, f"scene={scene!r}")
+    elif isinstance(scene, dict):
+        document = copy.deepcopy(scene)
+    else:
+        raise ValueError(f"scene must be a file path (string) or a [scene] table, got {type(scene).__name__}")
+    try:
+        scene_from_dict(copy.deepcopy(document))
+    except ValueError as error:
+        raise ValueError(f"scene: {error}") from None
+    return document
+
+
+def _axes(table, section: str) -> tuple[tuple[str, tuple], ...]:
+    if not isinstance(table, dict):
+        raise ValueError(f"[{section}] must be a table of dotted keys, got {type(table).__name__}")
+    axes = []
+    for key, values in table.items():
+        if isinstance(values, dict):
+            raise ValueError(f"[{section}] {key!r} is a table: quote dotted keys, \"{key}.KEY\" = [...]")
+        if not isinstance(values, list):
+            raise ValueError(f"[{section}] axis {key!r} must be a list of values, got {values!r}")
+        if not values:
+            raise ValueError(f"[{section}] axis {key!r} is empty")
+        for value in values:
+            if not _is_plain(value):
+                raise ValueError(f"[{section}] axis {key!r}: value {value!r} is not a number, string, boolean or "
+                                 f"list of these")
+        if any(isinstance(v, float) for v in values):          # 1 and 1.0 are the same point: one type per axis
+            values = [float(v) if isinstance(v, int) and not isinstance(v, bool) else v for v in values]
+        axes.append((key, tuple(values)))
+    return tuple(axes)
+
+
+def _is_plain(value) -> bool:
+    if isinstance(value, list):
+        return all(_is_plain(v) for v in value)
+    if isinstance(value, float):
+        return math.isfinite(value)
+    return isinstance(value, (bool, int, str))
+
+
+def _parse_outputs(outputs) -> list[tuple[str, str, str | None]]:
+    """(text, quantity, index text or None) per output; checks the syntax and the quantity names."""
+    if not isinstance(outputs, list) or not outputs:
+        raise ValueError("outputs must be a non-empty list, e.g. outputs = [\"stick_ratio@-1\", \"wall_time\"]")
+    per_increment = increment_quantities()
+    parsed = []
+    for text in outputs:
+        if not isinstance(text, str):
+            raise ValueError(f"outputs: {text!r} is not a string like \"stick_ratio@-1\"")
+        quantity, at, index = text.partition("@")
+        if at:
+            if quantity not in per_increment:
+                raise ValueError(f"outputs: {text!r}: {quantity!r} is not a per-increment quantity; allowed: "
+                                 f"{list(per_increment)}")
+            if index != "*" and not index.lstrip("-").isdigit():
+                raise ValueError(f"outputs: {text!r}: the increment after @ must be an integer (from 0, negative "
+                                 f"from the end) or *")
+            parsed.append((text, quantity, index))
+        elif quantity in CASE_QUANTITIES:
+            parsed.append((text, quantity, None))
+        elif quantity in per_increment:
+            raise ValueError(f"outputs: {text!r} is per increment: say which, e.g. \"{quantity}@-1\" (last) or "
+                             f"\"{quantity}@*\" (every increment)")
+        else:
+            raise ValueError(f"outputs: {text!r} is not a known quantity; per increment (with @INDEX): "
+                             f"{list(per_increment)}; per case: {list(CASE_QUANTITIES)}")
+    texts = [t for t, _, _ in parsed]
+    repeated = sorted({t for t in texts if texts.count(t) > 1})
+    if repeated:
+        raise ValueError(f"outputs: {repeated[0]!r} is listed twice")
+    return parsed
+
+
+def _expand_outputs(parsed, cases: list[Case]) -> tuple[Output, ...]:
+    """Resolve ``*`` to every increment of the longest path, and check each index against every case's path."""
+    shortest = min(case.n_increments for case in cases)
+    longest = max(case.n_increments for case in cases)
+    outputs = []
+    for text, quantity, index in parsed:
+        if index is None:
+            outputs.append(Output(text, quantity))
+        elif index == "*":
+            outputs.extend(Output(f"{quantity}@{i}", quantity, i) for i in range(longest))
+        else:
+            number = int(index)
+            if not -shortest <= number < shortest:
+                raise ValueError(f"outputs: {text!r}: increment {number} does not exist in every case (the shortest "
+                                 f"load path has {shortest} increments: {-shortest} to {shortest - 1})")
+            outputs.append(Output(text, quantity, number))
+    return tuple(outputs)
+
+
+def _points(grid, zipped) -> list[tuple[tuple[str, object], ...]]:
+    grid_points = list(itertools.product(*[[(key, v) for v in values] for key, values in grid]))
+    zip_points = list(zip(*[[(key, v) for v in values] for key, values in zipped])) or [()]
+    return [tuple(g) + tuple(z) for g in grid_points for z in zip_points]
+
+
+def _build_cases(base: dict, grid, zipped) -> list[Case]:
+    from contact.scene import scene_from_dict
+
+    cases, seen = [], {}
+    for parameters in _points(grid, zipped):
+        document = copy.deepcopy(base)
+        for key, value in parameters:
+            set_dotted(document, key, copy.deepcopy(value))
+        try:
+            scene = scene_from_dict(copy.deepcopy(document))
+        except ValueError as error:
+            axes = [key for key, _ in parameters]
+            raise ValueError(f"case {dict(parameters)} (axes {axes}): {error}") from None
+        case_id = case_hash(document)
+        if case_id in seen:
+            raise ValueError(f"cases {seen[case_id]} and {dict(parameters)} are the same scene: an axis repeats "
+                             f"a value")
+        seen[case_id] = dict(parameters)
+        cases.append(Case(case_id, parameters, document, scene))
+    return cases
+
+
+def case_hash(document: dict) -> str:
+    """Id of a case: SHA-256 of its scene document (base scene + parameters), name left out, 1 and 1.0 equal."""
+    def canonical(value):
+        if isinstance(value, dict):
+            return {k: canonical(v) for k, v in value.items() if k != "name" or value is not document}
+        if isinstance(value, list):
+            return [canonical(v) for v in value]
+        if isinstance(value, int) and not isinstance(value, bool):
+            return float(value)
+        return value
+
+    text = json.dumps(canonical(document), sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
