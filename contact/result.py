@@ -11,7 +11,8 @@ from contact._newton import OPEN, STICK, ContactState
 from contact.scene import Scene
 from fem.elasticity import ElasticModel
 
-__all__ = ["Increment", "ContactResult", "PathNotCompleted", "record_increment"]
+__all__ = ["Increment", "ContactResult", "PathNotCompleted", "LoadNotCarried", "ContactUnderResolved",
+           "record_increment"]
 
 
 @dataclass
@@ -81,6 +82,22 @@ class PathNotCompleted(RuntimeError):
         self.result = result
 
 
+class LoadNotCarried(ValueError):
+    """A force target the contact cannot carry (beyond gross slip); ``result`` keeps the increments before it."""
+
+    def __init__(self, message: str, result: ContactResult):
+        super().__init__(message)
+        self.result = result
+
+
+class ContactUnderResolved(ValueError):
+    """The contact patch covers too few surface points for a stick ratio to mean anything; ``result`` is kept."""
+
+    def __init__(self, message: str, result: ContactResult):
+        super().__init__(message)
+        self.result = result
+
+
 def record_increment(kind, state: ContactState, iterations, history, model, factorization, compliance, candidates, areas,
             lever, scene, seconds, multiplicity=1.0) -> Increment:
     """Post-process a converged state: areas, radii, stick ratio, pressures, full displacement and base traction.
@@ -106,8 +123,11 @@ def record_increment(kind, state: ContactState, iterations, history, model, fact
     check_no_penetration(model, candidates, displacement_full, scene, state.depth)
     return Increment(
         load_kind=kind, normal_force=multiplicity * float(state.normal_force.sum()),
-        tangential_force=[multiplicity * float(v) for v in state.tangential_force.sum(axis=0)],
-        torque=multiplicity * float((lever * state.tangential_force).sum()), depth=float(state.depth),
+        # a mirror half carries half of F_x; its F_y and torque are cancelled by the other half
+        tangential_force=[multiplicity * float(state.tangential_force[:, 0].sum()),
+                          float(state.tangential_force[:, 1].sum()) if multiplicity == 1.0 else 0.0],
+        torque=float((lever * state.tangential_force).sum()) if multiplicity == 1.0 else 0.0,
+        depth=float(state.depth),
         shift=[float(v) for v in state.shift], angle=float(state.angle),
         contact_area=contact_area, stick_area=stick_area, contact_radius=math.sqrt(contact_area / math.pi),
         stick_radius=math.sqrt(stick_area / math.pi),

@@ -10,7 +10,8 @@ import numpy as np
 
 from contact._controls import check_feasible, controls as load_controls, scaled, solve_with_substeps
 from contact._newton import OPEN, SLIP, STICK, ContactNotConverged, ContactState, solve_increment
-from contact.result import ContactResult, Increment, PathNotCompleted, record_increment
+from contact.result import (ContactResult, ContactUnderResolved, Increment, LoadNotCarried, PathNotCompleted,
+                            record_increment)
 from contact.compliance import SurfaceCompliance
 from contact.scene import LoadKind, Scene
 from fem.elasticity import ElasticModel, assemble_elastic_model
@@ -26,6 +27,9 @@ def _max_normal_load(scene: Scene) -> tuple[float | None, float | None]:
     depths = [v for load in scene.loads if load.kind == LoadKind.PRESS and load.control == "displacement"
               for v in load.values]
     return (max(forces) if forces else None), (max(depths) if depths else None)
+
+
+MIN_POINTS_PER_CONTACT = 7   # a centre point and one ring: fewer cannot resolve a contact radius or a stick zone
 
 
 def contact_centers(scene: Scene) -> np.ndarray:
@@ -99,8 +103,16 @@ def preparation_key(scene: Scene) -> tuple:
     return (scene.gel, scene.material, scene.mesh, scene.body.center, round(fine_radius, 12), half)
 
 
+LOCKING_NU = 0.49     # above this tets lock: the stability study finds c/a ~0.1 low and a 12-21 % small (P1)
+
+
 def prepare(scene: Scene) -> Prepared:
     """Mesh the gel, assemble K and factorize it once (reused by every increment and by scenes of equal key)."""
+    if scene.material.nu > LOCKING_NU:
+        import warnings
+
+        warnings.warn(f"material.nu={scene.material.nu} > {LOCKING_NU}: tetrahedra lock (P1 badly, P2 partly; "
+                      f"studies stability measures c/a about 0.1 low); results are not reliable", stacklevel=2)
     timings = {}
     start = time.perf_counter()
     fine_radius, half = _fine_radius_and_half(scene)
@@ -189,7 +201,10 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
         for kind, control, friction_on in controls:
             step_start = time.perf_counter()
             control = scaled(control, 1.0 / multiplicity)
-            check_feasible(control, state, scene.contact.mu, lever)
+            try:
+                check_feasible(control, state, scene.contact.mu, lever)
+            except ValueError as error:
+                raise LoadNotCarried(f"increment {len(result.increments) + 1} ({kind}): {error}", result) from None
             mu = scene.contact.mu if friction_on else 0.0
 
             def solve(start_state, target):
@@ -205,9 +220,16 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
                                              compliance, candidates, areas, lever, scene,
                                              time.perf_counter() - step_start, multiplicity))
             result.increments[-1].substeps = substeps
+            in_contact = int(np.count_nonzero(state.status != OPEN))
+            if in_contact < MIN_POINTS_PER_CONTACT * len(contact_centers(scene)):
+                raise ContactUnderResolved(
+                    f"increment {len(result.increments)} ({kind}): the contact covers only {in_contact} surface "
+                    f"point(s) for {len(contact_centers(scene))} contact(s); at least {MIN_POINTS_PER_CONTACT} each "
+                    f"are needed for a contact radius and a stick ratio: refine mesh.size_contact (now "
+                    f"{scene.mesh.size_contact} mm) or raise the load", result)
             if bar is not None:
                 bar.update(1)
-    except PathNotCompleted as error:
+    except (PathNotCompleted, LoadNotCarried, ContactUnderResolved) as error:
         result.error = str(error)
         raise
     finally:

@@ -90,8 +90,12 @@ def graded_block_mesh(spec: BlockMeshSpec, max_rounds: int = 80):
                                axis(spec.thickness, -spec.thickness))
     with quiet_skfem():
         for _ in range(max_rounds):
-            centroids = mesh.p[:, mesh.t].mean(axis=1)
-            marked = np.flatnonzero(_longest_edges(mesh) > spec.target_size(centroids) * (1 + 1e-9))
+            # the smallest target over an element's corners and centroid: a large element that reaches into the
+            # fine zone is refined even when its centroid lies outside it
+            corners = mesh.p[:, mesh.t]                                          # (3, 4, n_tets)
+            wanted = np.minimum(spec.target_size(corners.mean(axis=1)),
+                                spec.target_size(corners.reshape(3, -1)).reshape(4, -1).min(axis=0))
+            marked = np.flatnonzero(_longest_edges(mesh) > wanted * (1 + 1e-9))
             if marked.size == 0:
                 return mesh
             mesh = mesh.refined(marked)

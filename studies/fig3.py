@@ -8,7 +8,6 @@ own b/a (a from the FEM contact area), so that the comparison is of the stick zo
 
 from __future__ import annotations
 
-import math
 import time
 from pathlib import Path
 
@@ -36,7 +35,7 @@ def run(out_dir, quick: bool = False) -> dict:
 
     from contact.solver import solve_scene
     from contact.theory import flat_curved, stick_ratio_profile
-    from studies._fem_shear import E, MU, NU, plate_shear_scene
+    from studies._fem_shear import E, NU, plate_shear_scene
 
     out_dir = Path(out_dir)
     size = 0.4 if quick else 0.2                          # mm: a/5 quick, a/10 default

@@ -26,7 +26,6 @@ def run(out_dir, quick: bool = False) -> dict:
     from controller.calibration import calibrate_gain
     from controller.estimator import estimate_slip
     from studies._fingertip import bench_scene, bump_layout, sensor_array, shifts_of
-    import dataclasses
 
     out_dir = Path(out_dir)
     shifts = (0.05, 0.1, 0.2) if quick else (0.04, 0.08, 0.12, 0.16, 0.2)       # >= 3 points: R^2 means something

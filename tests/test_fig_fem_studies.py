@@ -1,9 +1,7 @@
 """FEM figure studies (Figs. 3, 4) in quick form, and the cap's contact radius converging toward Hertz."""
 
 import csv
-import math
 
-import numpy as np
 import pytest
 
 from contact.scene import BodySpec, ContactSpec, GelSpec, Load, LoadKind, Material, MeshSettings, Scene
