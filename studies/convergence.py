@@ -20,6 +20,43 @@ TARGET_STICK_RATIO_ERROR = 0.02         # the solver issue's target for the HCM-
 KNEE_FACTOR = 1.15                      # knee: cheapest mesh whose error is within 15 % of the best one
 
 
+ARRAY_SIZES = (0.9, 0.6, 0.4, 0.3)      # mm, element size at the bump tops of the 3x3 fingertip (not in --quick)
+ARRAY_LOAD_RATIO = 0.5
+
+
+def solve_array_case(size_contact: float) -> dict:
+    """The 3x3 fingertip of figs. 6 and 9 under a plate: press 2 N (frictionless), shear to Q/(mu P) = 0.5.
+
+    Errors: the array's stick ratio against Cattaneo-Mindlin (every bump carries Q/P = 0.5 of its own load) and
+    the mean bump contact radius against Hertz with an equal share P/9 (the base couples the bumps a little).
+    """
+    from contact.scene import ContactSpec, Load, LoadKind, MeshSettings
+    from contact.solver import solve_scene
+    from contact.theory import hertz, stick_ratio_translational
+    from studies import _fingertip as tip
+
+    base = tip.bench_scene(3, "shift", (0.1,), size_contact, tip.BENCH_SIZE_BASE)
+    scene = dataclasses.replace(
+        base, contact=ContactSpec(mu=tip.FRICTION, frictionless_press=True),
+        mesh=MeshSettings(size_contact=size_contact, size_far=3.0, size_base=tip.BENCH_SIZE_BASE),
+        loads=(Load(LoadKind.PRESS, "force", (tip.NORMAL_FORCE,)),
+               Load(LoadKind.SHEAR, "force", (ARRAY_LOAD_RATIO * tip.FRICTION * tip.NORMAL_FORCE,))))
+    start = time.perf_counter()
+    result = solve_scene(scene)
+    wall = time.perf_counter() - start
+    bumps = 9
+    radius = float(hertz(tip.NORMAL_FORCE / bumps, scene.gel.geometry.bump_radius,
+                         scene.material.effective_modulus).contact_radius)
+    contact_radius = float(np.sqrt(result.increments[0].contact_area / (bumps * np.pi)))
+    stick_error = result.increments[1].stick_ratio - float(stick_ratio_translational(ARRAY_LOAD_RATIO, 2))
+    return dict(study="3x3 fingertip (P1)", size_contact=size_contact, order=1, n_shear=1,
+                dofs=result.mesh_info["dofs"], elements=result.mesh_info["elements"],
+                compliance_columns=result.timings["compliance_columns"], wall_time=wall,
+                stick_ratio_error=abs(stick_error), stick_ratio_error_signed=stick_error,
+                final_stick_ratio_error=stick_error, contact_radius_error=contact_radius / radius - 1.0,
+                shift_error=float("nan"))
+
+
 def _cases(quick: bool) -> list[dict]:
     # bisection refines by levels: these sizes give distinct top-surface spacings (0.3 and 0.25 would not)
     sizes = (0.35, 0.25) if quick else (0.35, 0.25, 0.17, 0.12, 0.1)
@@ -74,6 +111,16 @@ def run(out_dir, quick: bool = False) -> dict:
     for case in tqdm(_cases(quick), desc=NAME, unit="case"):
         rows.append({**case, **solve_case(**{k: case[k] for k in ("size_contact", "order", "n_shear")})})
         write_csv_atomic(out_dir / f"{NAME}.csv", rows)          # keep what is done if a later case fails
+    for size in (() if quick else tqdm(ARRAY_SIZES, desc=f"{NAME} (3x3 fingertip)", unit="case")):
+        rows.append(solve_array_case(size))
+        write_csv_atomic(out_dir / f"{NAME}.csv", rows)
+    array_rows = [r for r in rows if r["study"] == "3x3 fingertip (P1)"]
+    if array_rows:
+        best_array = min(r["stick_ratio_error"] for r in array_rows)
+        array_knee = min((r for r in array_rows if r["stick_ratio_error"] <= KNEE_FACTOR * best_array),
+                         key=lambda r: r["wall_time"])
+        print(f"{NAME}: 3x3 fingertip knee: size_contact = {array_knee['size_contact']} mm "
+              f"({array_knee['wall_time']:.1f} s, stick-ratio error {array_knee['stick_ratio_error']:.4f})")
     sizes = [r for r in rows if r["study"] == "element size (P1)"]
     best = min(r["stick_ratio_error"] for r in sizes)
     # the knee: the cheapest P1 mesh within 15 % of the best error seen (finer meshes buy little more)
@@ -96,7 +143,8 @@ def _plot(rows: list[dict], knee: dict | None):
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.6))
     metrics = (("stick_ratio_error", "max |c/a - Cattaneo-Mindlin|"), ("contact_radius_error", "a / a_Hertz - 1"),
                ("shift_error", "max |shift / Mindlin - 1|"))
-    markers = {"element size (P1)": "o-", "element order (P2)": "s-", "shear increments": "^--"}
+    markers = {"element size (P1)": "o-", "element order (P2)": "s-", "shear increments": "^--",
+               "3x3 fingertip (P1)": "D-"}
     for axis, (key, label) in zip(axes, metrics):
         for study, style in markers.items():
             subset = [r for r in rows if r["study"] == study]

@@ -44,12 +44,12 @@ def run(out_dir, quick: bool = False) -> dict:
     from tqdm import tqdm
 
     from contact.solver import solve_scene
-    from studies._fingertip import bench_scene
+    from studies._fingertip import BENCH_SIZE_BASE, BENCH_SIZE_CONTACT, bench_scene
 
     out_dir = Path(out_dir)
     arrays = (1, 3) if quick else (1, 2, 3, 4)
     shifts = (0.1, 0.2, 0.3) if quick else (0.05, 0.1, 0.15, 0.2, 0.25, 0.3)
-    size_contact, size_base = (0.7, 1.5) if quick else (0.4, 1.0)
+    size_contact, size_base = (0.7, 1.5) if quick else (BENCH_SIZE_CONTACT, BENCH_SIZE_BASE)
     rows = []
     start = time.perf_counter()
     for n in tqdm(arrays, desc=NAME, unit="array"):

@@ -25,12 +25,13 @@ def run(out_dir, quick: bool = False) -> dict:
     from contact.solver import solve_scene
     from controller.calibration import calibrate_gain
     from controller.estimator import estimate_slip
-    from studies._fingertip import bench_scene, bump_layout, sensor_array, shifts_of
+    from studies._fingertip import (BENCH_SIZE_BASE, BENCH_SIZE_CONTACT, bench_scene, bump_layout, sensor_array,
+                                    shifts_of)
 
     out_dir = Path(out_dir)
     shifts = (0.05, 0.1, 0.2) if quick else (0.04, 0.08, 0.12, 0.16, 0.2)       # >= 3 points: R^2 means something
     angles = (0.003, 0.006, 0.01) if quick else (0.002, 0.004, 0.006, 0.008, 0.01)
-    size_contact, size_base = (0.7, 1.5) if quick else (0.4, 1.0)
+    size_contact, size_base = (0.7, 1.5) if quick else (BENCH_SIZE_CONTACT, BENCH_SIZE_BASE)
     array, layout = sensor_array(SENSOR_PITCH), bump_layout(3)
     start = time.perf_counter()
     translation = solve_scene(bench_scene(3, "shift", shifts, size_contact, size_base))
