@@ -37,7 +37,7 @@ def run(out_dir, quick: bool = False) -> dict:
     from studies._fem_shear import plate_shear_scene
 
     out_dir = Path(out_dir)
-    ratios = (0.3, 0.7, 0.95) if quick else (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 0.98, 0.99)
+    ratios = (0.3, 0.5, 0.7, 0.95) if quick else (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 0.98, 0.99)
     rows, results = [], {}
     start = time.perf_counter()
     for case, gel, normal_force, size in _cases(quick):

@@ -9,6 +9,9 @@ from contact.solver import solve_scene
 from contact.theory import hertz
 
 
+QUICK_H_OVER_A = 0.2        # quick meshes of fig3 / fig4: h = 0.4 mm on contacts of radius a ~ 2 mm
+
+
 def read_rows(path):
     with open(path) as stream:
         return list(csv.DictReader(stream))
@@ -22,8 +25,9 @@ def test_fig3_quick_follows_ciavarella_jager(tmp_path):
     assert {"case", "load_ratio", "stick_ratio_fem", "stick_ratio_theory", "error"} <= set(rows[0])
     for row in rows:
         assert float(row["error"]) == pytest.approx(float(row["stick_ratio_fem"]) - float(row["stick_ratio_theory"]))
-    # quick mesh h = a/5: the stick edge is known to +-h/2 = 0.1 a (THEORY.md sec. 6), checked up to Q/(mu P) = 0.9
-    assert summary["max_error"] < 0.1 + 0.01
+    # quick mesh h = a/5: the stick and contact edges are each known to +-h/2 (THEORY.md sec. 6), so c/a to
+    # +-(h/2a)(1 + c/a) <= h/a = 0.2; checked up to Q/(mu P) = 0.9 (fTetWild meshes differ from run to run)
+    assert summary["max_error"] < QUICK_H_OVER_A
     # the flat face keeps the stick zone: at Q/(mu P) = 0.9 more stays stuck the larger b/a is
     at_09 = {float(r["b_over_a"]): float(r["stick_ratio_fem"]) for r in rows if float(r["load_ratio"]) == 0.9}
     assert at_09[0.0] < at_09[0.5] < at_09[0.9]
@@ -36,8 +40,10 @@ def test_fig4_quick_pad_drops_late_and_cap_follows_mindlin(tmp_path):
     rows = read_rows(tmp_path / "fig4.csv")
     pad = {float(r["load_ratio"]): float(r["stick_ratio_fem"]) for r in rows if r["case"] == "flat pad"}
     cap = {float(r["load_ratio"]): float(r["stick_ratio_fem"]) for r in rows if r["case"] == "spherical cap"}
-    # cap at h = a/5: +-0.1 quantisation (THEORY.md sec. 6)
-    assert summary["max_error"] < 0.1 + 0.01
+    # cap at h = a/5: c/a to +-h/a as in the fig3 test; the check point Q/(mu P) = 0.5 explicitly
+    assert summary["max_error"] < QUICK_H_OVER_A
+    cap_at_half = next(r for r in rows if r["case"] == "spherical cap" and float(r["load_ratio"]) == 0.5)
+    assert abs(float(cap_at_half["error"])) < QUICK_H_OVER_A
     # the pad stays almost fully stuck at moderate load and loses most of its stick area only near gross slip
     assert pad[0.3] > 0.95 and pad[0.3] > cap[0.3]
     assert pad[0.7] - pad[0.95] > 2 * (cap[0.7] - cap[0.95])
