@@ -98,8 +98,8 @@ class ContactUnderResolved(ValueError):
         self.result = result
 
 
-def record_increment(kind, state: ContactState, iterations, history, model, factorization, compliance, candidates, areas,
-            lever, scene, seconds, multiplicity=1.0) -> Increment:
+def record_increment(kind, state: ContactState, iterations, history, model, factorization, candidates, areas,
+                     lever, scene, seconds, multiplicity=1.0, substeps=1) -> Increment:
     """Post-process a converged state: areas, radii, stick ratio, pressures, full displacement and base traction.
 
     ``multiplicity`` = 2 for a half model: whole-body forces and areas are twice those of the computed half.
@@ -133,7 +133,7 @@ def record_increment(kind, state: ContactState, iterations, history, model, fact
         stick_radius=math.sqrt(stick_area / math.pi),
         stick_ratio=math.sqrt(stick_area / contact_area) if contact_area > 0 else 0.0,
         max_pressure=float(pressure.max()), iterations=int(iterations), residual=float(history[-1]),
-        seconds=float(seconds), status=status.copy(), pressure=pressure, traction=traction,
+        seconds=float(seconds), substeps=int(substeps), status=status.copy(), pressure=pressure, traction=traction,
         base_pressure=base_forces[:, 2] / model.base.areas, base_traction=base_forces[:, :2] / model.base.areas[:, None],
         displacement_full=displacement_full)
 

@@ -217,14 +217,13 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
             except ContactNotConverged as error:
                 raise PathNotCompleted(f"increment {len(result.increments) + 1} ({kind}): {error}", result) from error
             result.increments.append(record_increment(kind, state, iterations, history, model, prepared.factorization,
-                                             compliance, candidates, areas, lever, scene,
-                                             time.perf_counter() - step_start, multiplicity))
-            result.increments[-1].substeps = substeps
+                                                      candidates, areas, lever, scene,
+                                                      time.perf_counter() - step_start, multiplicity, substeps))
             in_contact = int(np.count_nonzero(state.status != OPEN))
-            if in_contact < MIN_POINTS_PER_CONTACT * len(contact_centers(scene)):
+            if in_contact < MIN_POINTS_PER_CONTACT * len(centers):
                 raise ContactUnderResolved(
                     f"increment {len(result.increments)} ({kind}): the contact covers only {in_contact} surface "
-                    f"point(s) for {len(contact_centers(scene))} contact(s); at least {MIN_POINTS_PER_CONTACT} each "
+                    f"point(s) for {len(centers)} contact(s); at least {MIN_POINTS_PER_CONTACT} each "
                     f"are needed for a contact radius and a stick ratio: refine mesh.size_contact (now "
                     f"{scene.mesh.size_contact} mm) or raise the load", result)
             if bar is not None:

@@ -92,7 +92,7 @@ def _face_points(basis: Basis, order: int, face_facets: np.ndarray) -> SurfacePo
         # P2: vertices and edge midpoints; each facet is split into 4 flat triangles so that every
         # quadratic node gets a positive tributary area (P2 vertex weights of the exact rule are zero).
         n_vertices = mesh.p.shape[1]
-        edge_ids = mesh.f2e[:, face_facets].T                           # (n_tri, 3): edges (0-1, 0-2, 1-2)?
+        edge_ids = mesh.f2e[:, face_facets].T                           # (n_tri, 3), order matched below
         edge_nodes = mesh.edges[:, edge_ids]                            # (2, n_tri, 3)
         mid = n_vertices + edge_ids                                     # pseudo ids for midpoints
 
