@@ -29,8 +29,9 @@ def _worker_name() -> str:
     return f"{socket.gethostname()}:{os.getpid()}"
 
 
-def failed_record(case_id: str, parameters: dict, error: str) -> dict:
-    """Record of a case whose task died before it could report (worker lost, bug in the task)."""
+def failed_record(case_id: str, parameters: dict, error: str | None) -> dict:
+    """Record of a case whose task died before it could report (worker lost, bug in the task); also the blank
+    template that a running case fills in."""
     return {"case_id": case_id, "parameters": parameters, "status": "failed", "error": error, "increments": [],
             "mesh_info": {}, "timings": {}, "prepare_time": 0.0, "solve_time": 0.0, "wall_time": 0.0,
             "prepared_here": False, "group": "", "worker": ""}
@@ -65,7 +66,7 @@ def _non_finite(rows: list[dict]) -> list[str]:
 
 def _solve_one(case_id, parameters, document, prepared, group):
     """Solve one case with ``prepared`` (or prepare it); returns (record, prepared for the next case)."""
-    from contact import PathNotCompleted, prepare, scene_from_dict, solve_scene
+    from contact import ContactUnderResolved, LoadNotCarried, PathNotCompleted, prepare, scene_from_dict, solve_scene
 
     start = time.perf_counter()
     record = failed_record(case_id, parameters, None)
@@ -80,8 +81,8 @@ def _solve_one(case_id, parameters, document, prepared, group):
         solve_start = time.perf_counter()
         try:
             result = solve_scene(scene, prepared=prepared)
-        except PathNotCompleted as error:
-            result = error.result
+        except (PathNotCompleted, LoadNotCarried, ContactUnderResolved) as error:
+            result = error.result                 # the increments converged before the failure are kept
             raise
         finally:
             record["solve_time"] = time.perf_counter() - solve_start
