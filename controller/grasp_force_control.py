@@ -154,11 +154,11 @@ class GraspForceController:
         ratios = np.minimum(np.abs(filtered) / np.asarray(references), p.ratio_limit)
         gamma = p.loop_rate * self.sample_period
         change = gamma * self.command * (ratios**self.exponents - 1.0)
+        if not p.rotational_slip_detection:
+            change[1] = 0.0                             # the channel is off: it neither adds force nor blocks draining
         if np.any(change > 0.0):
             change = np.maximum(change, 0.0)            # no channel drains while another asks for more force
         self.components = np.clip(self.components + change, 0.0, p.maximum_force - self.minimum_force)
-        if not p.rotational_slip_detection:
-            self.components[1] = 0.0
         self.command = min(self.minimum_force + self.components.sum(), p.maximum_force)
 
     def _release(self, filtered: np.ndarray) -> None:

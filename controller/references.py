@@ -46,6 +46,9 @@ class ReferenceParameters:
     reference_force : float -- grasp force F_0 at which the targets hold [N], > 0.
     profile_order : float -- n of the fingertip profile C r^n (2: hemisphere) [-], >= 1.
     scale_with_force : bool -- scale the targets with (F / F_0)^q (see module docstring); False: fixed targets.
+    translational_force_exponent, rotational_force_exponent : float or None -- q_x, q_theta of the scaling
+        u_ref ~ F^q when measured on the fingertip (e.g. an array, whose twist signal grows like F^(2/3) because its
+        bumps translate); None: the single-profile values of the module docstring. Ignored without scaling.
     translational_slip_factor, rotational_slip_factor : float -- how much faster |u| / u_ref grows as F falls at
         the design point than in full stick (>= 1; 1 = full stick): the logarithmic slope of the partial-slip curve,
         x h'(x) / h(x) with h(x) = 1 - (1 - x)^(2/3) at x = Q/(mu P) (Mindlin), y f'(y) / f(y) with f the Lubkin
@@ -58,6 +61,8 @@ class ReferenceParameters:
     reference_force: float = 1.0
     profile_order: float = 2.0
     scale_with_force: bool = True
+    translational_force_exponent: float | None = None
+    rotational_force_exponent: float | None = None
     translational_slip_factor: float = 1.0
     rotational_slip_factor: float = 1.0
 
@@ -66,14 +71,20 @@ class ReferenceParameters:
         check_positive("rotational_reference", self.rotational_reference, "rad")
         check_positive("reference_force", self.reference_force, "N")
         check_range("profile_order", self.profile_order, 1.0, math.inf, high_open=True)
+        for name in ("translational_force_exponent", "rotational_force_exponent"):
+            if getattr(self, name) is not None:
+                check_range(name, getattr(self, name), 0.0, 2.0)
         check_range("translational_slip_factor", self.translational_slip_factor, 1.0, math.inf, high_open=True)
         check_range("rotational_slip_factor", self.rotational_slip_factor, 1.0, math.inf, high_open=True)
 
     @property
     def force_exponents(self) -> tuple[float, float]:
-        """(q_x, q_theta): reference ~ F^q; (n/(n+1), (n-1)/(n+1)) if scaled, else (0, 0)."""
+        """(q_x, q_theta): reference ~ F^q; the measured exponents or (n/(n+1), (n-1)/(n+1)) if scaled, else (0, 0)."""
+        if not self.scale_with_force:
+            return 0.0, 0.0
         n = self.profile_order
-        return ((n / (n + 1.0), (n - 1.0) / (n + 1.0)) if self.scale_with_force else (0.0, 0.0))
+        q_x, q_theta = self.translational_force_exponent, self.rotational_force_exponent
+        return (n / (n + 1.0) if q_x is None else q_x, (n - 1.0) / (n + 1.0) if q_theta is None else q_theta)
 
     @property
     def inversion_exponents(self) -> tuple[float, float]:

@@ -36,8 +36,9 @@ from controller import (AccelerationControlParameters, AccelerationController, B
                         GraspPhase, ReferenceGenerator, ReferenceParameters, SensorArray, bump_positions, calibrate_gain, cell_force_operator,
                         estimate_slip, sample)
 from controller.sensor import PressureField
+from fem.validation import check_range
 
-__all__ = ["GraspObject", "TABLE_I_OBJECTS", "TrialSettings", "TrialResult", "GraspWorld", "SensingChain",
+__all__ = ["GraspObject", "TABLE_I_OBJECTS", "TargetDesign", "TrialSettings", "TrialResult", "GraspWorld", "SensingChain",
            "run_trial", "random_settings", "required_grip_force", "DESIGN_FRICTION"]
 
 GRAVITY = 9.81                      # m/s^2
@@ -45,19 +46,13 @@ MM_PER_M = 1000.0
 PHYSICS_RATE_HZ = 8000.0            # MuJoCo step = acceleration-control rate (paper: 8 kHz)
 CONTACT_RATE_HZ = 2000.0            # reduced-model contact update: omega dt <= 0.35, explicit damping c dt / m <= 0.9
 DESIGN_FRICTION = 0.4               # lowest friction the controller targets are designed for (mu range 0.4-1.0)
-DESIGN_LOAD_RATIO = 0.6             # Q / (mu_low P) at the translational target
-DESIGN_TORQUE_RATIO = 0.6           # T / T_slip(mu_low) at the rotational target
 APPROACH_GAP_M = 0.001              # initial gap between each bump tip and the object face
 LIFT_HEIGHT_M = 0.05
-# The array's twist signal grows like F^(2/3) at a fixed torque ratio (its bumps translate, Mindlin), which the
-# controller's single-hemisphere scaling (theta_ref ~ F^((n-1)/(n+1))) gives for n = 5; u_x,ref then grows like
-# F^(5/6) instead of F^(2/3) (targets 16 % higher at 2.4 times the reference force). A separate rotational force
-# exponent in controller.ReferenceParameters would remove the compromise.
-TARGET_PROFILE_ORDER = 5.0
 GRID_SPACING = 1.0                  # mm, base-pressure grid (kernel radius >= 4.7 mm; sensor cells 3 mm)
 TORQUE_LIMIT = 1500.0               # N mm, finger actuator (30 N per finger at the 50 mm arm radius)
 ARM_RADIUS = AccelerationControlParameters().arm_radius      # mm per rad of the finger drive
 TABLE_CLEARANCE_M = 0.001           # object lower than this above the table during the hold = touches the ground
+ROTATION_LIMIT = 0.05               # rad (3 deg): an object turned further in the grasp has rotated out of it
 
 
 @dataclass(frozen=True)
@@ -91,10 +86,28 @@ TABLE_I_OBJECTS = {
 
 
 @dataclass(frozen=True)
+class TargetDesign:
+    """What the controller's targets are designed for: the lowest friction expected and the load ratios
+    Q / (mu P) and T / T_slip at which the bench sets u_x,ref and theta_ref. At a friction mu in full stick the
+    controller then holds about mu / (friction load_ratio) times the least force (the displacement hardly depends
+    on mu below gross slip), which is its safety factor against an unknown surface."""
+
+    friction: float = DESIGN_FRICTION
+    load_ratio: float = 0.6
+    torque_ratio: float = 0.6
+
+    def __post_init__(self):
+        check_range("targets.friction", self.friction, 0.0, math.inf, low_open=True, high_open=True)
+        check_range("targets.load_ratio", self.load_ratio, 0.0, 1.0, low_open=True, high_open=True)
+        check_range("targets.torque_ratio", self.torque_ratio, 0.0, 1.0, low_open=True, high_open=True)
+
+
+@dataclass(frozen=True)
 class TrialSettings:
     """One trial: friction fingertip-object, grasp-position jitter (along x, z) [m], object yaw misalignment [rad]
     (the bumps touch one after the other), sensor noise [N per node], constant_force [N] (None: the grasp
-    controller; a number: that force throughout, for tau_min), phase durations [s], seed."""
+    controller; a number: that force throughout, for tau_min), phase durations [s], seed, and what the
+    controller's targets are designed for (TargetDesign)."""
 
     friction: float = 0.8
     grasp_offset: tuple[float, float] = (0.0, 0.0)
@@ -105,6 +118,7 @@ class TrialSettings:
     hold_time: float = 4.0
     place: bool = True
     seed: int = 0
+    targets: TargetDesign = TargetDesign()
 
 
 @dataclass
@@ -112,7 +126,9 @@ class TrialResult:
     """Trace (10 ms rows: time, phase, force command, grip force, u_x, theta, object height, slip, rotation) and
     the verdicts: dropped (object touched the table during the hold), crushed (a finger's normal force exceeded
     the crush force), success, plus statistics: forces [N] per finger, creep [um/s] and rotation creep [mrad/s] of
-    the grasp point relative to the gripper after the first 0.5 s of the hold."""
+    the grasp point relative to the gripper after the first 0.5 s of the hold, the largest rotation of the object
+    in the grasp during lift and hold [mrad] and ``rotated`` (beyond ROTATION_LIMIT: it turned out of the grasp,
+    which the paper's success criterion - no table contact - does not count)."""
 
     object_name: str
     settings: TrialSettings
@@ -128,8 +144,13 @@ class TrialResult:
     rotation_creep_mrad_per_s: float = math.nan
     hold_slip_mm: float = math.nan
     hold_rotation_mrad: float = math.nan
+    max_rotation_mrad: float = math.nan
     wall_time: float = math.nan
     simulated_time: float = math.nan
+
+    @property
+    def rotated(self) -> bool:
+        return bool(self.max_rotation_mrad > 1e3 * ROTATION_LIMIT)
 
     @property
     def real_time_factor(self) -> float:
@@ -292,8 +313,8 @@ class SensingChain:
 
     The bench (noise-free, like the FEM bench of Fig. 9) calibrates the CoP gain on small shifts and sets the
     controller's targets: u_x,ref is what the chain reports when every bump carries Q_i / (mu_low P_i) =
-    DESIGN_LOAD_RATIO, theta_ref when the array carries DESIGN_TORQUE_RATIO of its slip torque, at the reference
-    force, for the lowest friction expected. Whether the targets scale with the force (``ReferenceParameters``) is
+    ``design.load_ratio``, theta_ref when the array carries ``design.torque_ratio`` of its slip torque, at the
+    reference force, for the lowest friction expected (``design.friction``). Whether the targets scale with the force (``ReferenceParameters``) is
     read off the bench too: a signal that follows the shear displacement grows like F^(2/3) at a fixed load ratio
     (scaled targets), one dominated by the overturning moment h Q / P stays constant (fixed targets). The
     controller's inversion exponents (its loop gain) are matched to the chain's measured slopes through the slip
@@ -302,8 +323,8 @@ class SensingChain:
 
     REFERENCE_FORCE = 5.0              # N, bench force for calibration and targets (mid-range of the holds)
 
-    def __init__(self, tip: ReducedFingertip, noise: float = 0.0, rng=None):
-        self.tip, self.rng = tip, rng
+    def __init__(self, tip: ReducedFingertip, noise: float = 0.0, rng=None, design: TargetDesign = TargetDesign()):
+        self.tip, self.rng, self.design = tip, rng, design
         self.grid = tip.base_grid(GRID_SPACING)
         self.array = SensorArray(noise_std=noise)
         self.layout = BumpLayout.grid((tip.design.cols, tip.design.rows), tip.design.pitch)
@@ -338,8 +359,9 @@ class SensingChain:
         truth[:, :, 0] = np.asarray(shifts)[:, None]
         return calibrate_gain(estimate.cop_shift[1:], truth[1:])
 
-    def _design_signal(self, force, load_ratio, torque_ratio, friction=DESIGN_FRICTION):
+    def _design_signal(self, force, load_ratio, torque_ratio):
         """(|t|, |theta|) the chain reports at a load ratio (x) or torque ratio (slip torque share) at force P."""
+        friction = self.design.friction
         bump_force = np.full(len(self.tip.centres), force / len(self.tip.centres))
         radius = self.tip.parameters.radius_coefficient * np.cbrt(bump_force)
         slip_torque = self.tip.slip_margin(bump_force, radius, friction, (0.0, 0.0), 1.0)[0]
@@ -349,12 +371,16 @@ class SensingChain:
 
     def design_references(self) -> ReferenceParameters:
         """Targets, force scaling and slip factors from the bench (class docstring)."""
-        force, x, y, step = self.REFERENCE_FORCE, DESIGN_LOAD_RATIO, DESIGN_TORQUE_RATIO, 0.01
+        force, x, y, step = self.REFERENCE_FORCE, self.design.load_ratio, self.design.torque_ratio, 0.01
         u_ref = self._design_signal(force, x, 0.0)[0]
         theta_ref = self._design_signal(force, 0.0, y)[1]
-        growth = math.log(self._design_signal(4.0 * force, x, 0.0)[0] / u_ref) / math.log(4.0)
-        references = ReferenceParameters(u_ref, theta_ref, force, profile_order=TARGET_PROFILE_ORDER,
-                                         scale_with_force=growth > 1.0 / 3.0)
+        # how the signals grow with the force at the design ratios (a hemisphere: u ~ F^(2/3), theta ~ F^(1/3); the
+        # array's twist signal ~ F^(2/3) too, its bumps translate), each channel scaled with its own exponent
+        growth = (math.log(self._design_signal(4.0 * force, x, 0.0)[0] / u_ref) / math.log(4.0),
+                  math.log(self._design_signal(4.0 * force, 0.0, y)[1] / theta_ref) / math.log(4.0))
+        references = ReferenceParameters(u_ref, theta_ref, force, scale_with_force=growth[0] > 1.0 / 3.0,
+                                         translational_force_exponent=min(max(growth[0], 0.0), 2.0),
+                                         rotational_force_exponent=min(max(growth[1], 0.0), 2.0))
         # |u| / u_ref(F) ~ F^(-e) at a constant load: e from a +-1 % force change at the design load
         span = math.log((1 + step) / (1 - step))
         ratios = []
@@ -445,7 +471,7 @@ class GraspWorld:
         mujoco.mj_forward(self.model, self.data)
         self.rng = np.random.default_rng(settings.seed)
         self.bridge = _ContactBridge(self.model, self.data, self.tip, obj, settings.friction)
-        self.sensing = SensingChain(self.tip, settings.sensor_noise, self.rng)
+        self.sensing = SensingChain(self.tip, settings.sensor_noise, self.rng, settings.targets)
         base = GraspForceParameters(approach_force=0.5, maximum_force=TORQUE_LIMIT / ARM_RADIUS) \
             if grasp_parameters is None else grasp_parameters
         self.grasp = GraspForceController(replace(base, rotational_slip_detection=settings.rotational_slip_detection),
@@ -515,7 +541,7 @@ class GraspWorld:
                                              - data.xpos[self.bridge.object_id])
         rows, hold = [], []
         u_x = theta = 0.0
-        count, command, dropped, force_peak = 0, 0.0, False, 0.0
+        count, command, dropped, force_peak, turned = 0, 0.0, False, 0.0, 0.0
         steps = int(round(self.schedule[-1][0] * PHYSICS_RATE_HZ))
         start = time.perf_counter()
         for step in range(steps):
@@ -540,20 +566,23 @@ class GraspWorld:
                 height_m = float(data.xpos[self.bridge.object_id][2] - 0.5 * self.obj.size[2])
                 rows.append((time_s, phase.value, command, self.bridge.grip_force_n, u_x, theta, height_m,
                              *relative_mm, rotation, int(self.bridge.sliding.sum())))
+                if phase in (GraspPhase.LIFT, GraspPhase.HOLD):
+                    turned = max(turned, abs(rotation))
                 if phase is GraspPhase.HOLD:
                     touching = self._touches_table() or height_m < TABLE_CLEARANCE_M
                     dropped |= touching
                     hold.append((time_s, self.bridge.grip_force_n, *relative_mm, rotation))
         wall = time.perf_counter() - start
-        return self._result(rows, hold, dropped, force_peak, wall, steps / PHYSICS_RATE_HZ)
+        return self._result(rows, hold, dropped, force_peak, turned, wall, steps / PHYSICS_RATE_HZ)
 
-    def _result(self, rows, hold, dropped, force_peak, wall, simulated) -> TrialResult:
+    def _result(self, rows, hold, dropped, force_peak, turned, wall, simulated) -> TrialResult:
         names = ("time", "phase", "force_command", "grip_force", "shear_displacement", "twist_angle",
                  "object_height_m", "slip_x_mm", "slip_y_mm", "slip_z_mm", "rotation", "sliding_bumps")
         trace = {name: [row[i] for row in rows] for i, name in enumerate(names)}
         result = TrialResult(self.obj.name, self.settings, trace, wall_time=wall, simulated_time=simulated)
         result.dropped = bool(dropped)
         result.max_force = float(force_peak)
+        result.max_rotation_mrad = 1e3 * float(turned)
         result.crushed = force_peak > self.obj.crush_force
         result.minimum_force = float(self.grasp.minimum_force) if self.grasp.minimum_force is not None else math.nan
         if hold:

@@ -5,7 +5,7 @@ force controller on the reduced 3x3-array fingertip (studies._grasp_world), rand
 grasp position (+-5 mm along the object, +-1 mm in height), object misalignment (+-1 deg) and sensor noise
 (0.5-2 mN per node). Success: the object never touches the table during the hold and no finger exceeds the
 object's crush force (eclair: 10 N, see studies._grasp_world). The controller knows neither mass, moment nor mu.
-Outputs: table1.csv (one row per trial), table1_summary.json, table1.png/pdf.
+Outputs: table1.csv (one row per trial, rewritten after each), table1_summary.json, table1.png/pdf.
 """
 
 from __future__ import annotations
@@ -44,22 +44,24 @@ def run(out_dir, quick: bool = False, trials: int | None = None, seed: int = 1) 
                              grasp_offset_z_mm=1e3 * settings.grasp_offset[1],
                              misalignment_deg=math.degrees(settings.misalignment), sensor_noise=settings.sensor_noise,
                              success=result.success, dropped=result.dropped, crushed=result.crushed,
+                             rotated=result.rotated, max_rotation_mrad=result.max_rotation_mrad,
                              minimum_force=result.minimum_force, hold_force_mean=result.hold_force_mean,
                              hold_force_max=result.hold_force_max, max_force=result.max_force,
                              required_force=required, force_ratio=result.hold_force_mean / required,
                              crush_force=obj.crush_force, creep_um_per_s=result.creep_um_per_s,
                              rotation_creep_mrad_per_s=result.rotation_creep_mrad_per_s,
                              real_time_factor=result.real_time_factor))
+            write_csv_atomic(out_dir / f"{NAME}.csv", rows)          # after every trial: nothing computed is lost
             print(f"{NAME}: {name} trial {trial}: mu {settings.friction:.2f} success {result.success} "
                   f"hold force {result.hold_force_mean:.2f} N (needed {required:.2f} N), "
                   f"creep {result.creep_um_per_s:.3f} um/s, real-time factor {result.real_time_factor:.2f}")
-    write_csv_atomic(out_dir / f"{NAME}.csv", rows)
     summary = _summary(rows)
     write_json_atomic(out_dir / f"{NAME}_summary.json", summary)
     for name, entry in summary["objects"].items():
         print(f"{NAME}: {name}: success {entry['success']} (paper {PAPER_SUCCESS[name]}), hold force "
               f"{entry['hold_force_mean']:.2f} +- {entry['hold_force_std']:.2f} N, force / needed "
-              f"{entry['force_ratio_mean']:.2f}, creep {entry['creep_um_per_s_max']:.3f} um/s max")
+              f"{entry['force_ratio_mean']:.2f}, creep {entry['creep_um_per_s_max']:.3f} um/s max, "
+              f"largest rotation in the grasp {entry['max_rotation_mrad']:.1f} mrad ({entry['rotated']} turned out)")
     print(f"{NAME}: benchmark: real-time factor of one trial {summary['real_time_factor_mean']:.2f} "
           f"(simulated s per wall s; MuJoCo 8 kHz, contact 2 kHz, control 1 kHz, sensor 100 Hz)")
     save_figure(_plot(rows, summary), out_dir, NAME)
@@ -80,7 +82,9 @@ def _summary(rows) -> dict:
                              max_force=float(max(row["max_force"] for row in mine)),
                              force_ratio_mean=float(np.nanmean(ratio)),
                              creep_um_per_s_max=float(np.nanmax([row["creep_um_per_s"] for row in mine])),
-                             dropped=sum(row["dropped"] for row in mine), crushed=sum(row["crushed"] for row in mine))
+                             dropped=sum(row["dropped"] for row in mine), crushed=sum(row["crushed"] for row in mine),
+                             rotated=sum(row["rotated"] for row in mine),
+                             max_rotation_mrad=float(np.nanmax([row["max_rotation_mrad"] for row in mine])))
     return dict(objects=objects, worst_failure_rate=1.0 - min(o["success_rate"] for o in objects.values()),
                 real_time_factor_mean=float(np.mean([row["real_time_factor"] for row in rows])))
 

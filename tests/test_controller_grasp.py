@@ -7,6 +7,7 @@ Q/(mu_low P) = 0.85 and T/(mu_low P a) = 0.5 (85 % of gross slip in each mode) a
 """
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -206,6 +207,16 @@ def test_reference_generator():
         generator.references("lunch", 1.0)
 
 
+def test_measured_force_exponents_replace_the_single_profile_ones():
+    # an array whose twist signal grows like F^(2/3): theta_ref follows it, u_x keeps the hemisphere's 2/3, and the
+    # inversion exponent of the twist channel is 1 / (3/(n+1) + q) = 1 / (1 + 2/3) = 0.6 for n = 2
+    parameters = ReferenceParameters(0.3, 0.1, reference_force=1.0, rotational_force_exponent=2.0 / 3.0)
+    u_x, theta = ReferenceGenerator(parameters).references(GraspPhase.HOLD, 8.0)
+    assert (u_x, theta) == pytest.approx((0.3 * 4.0, 0.1 * 4.0), rel=1e-12)
+    assert parameters.inversion_exponents == pytest.approx((1.0, 0.6), rel=1e-12)
+    assert replace(parameters, scale_with_force=False).force_exponents == (0.0, 0.0)
+
+
 @pytest.mark.parametrize("field, value, match", [
     ("sample_rate_hz", 0.0, "sample_rate_hz=0.0 outside"),
     ("filter_cutoff_hz", 600.0, "filter_cutoff_hz=600.0 outside"),
@@ -228,6 +239,8 @@ def test_invalid_grasp_parameters_raise(field, value, match):
     ("rotational_reference", -0.1, "rotational_reference=-0.1 outside"),
     ("reference_force", 0.0, "reference_force=0.0 outside"),
     ("profile_order", 0.5, "profile_order=0.5 outside"),
+    ("rotational_force_exponent", -0.1, "rotational_force_exponent=-0.1 outside"),
+    ("translational_force_exponent", 3.0, "translational_force_exponent=3.0 outside"),
 ])
 def test_invalid_reference_parameters_raise(field, value, match):
     with pytest.raises(ValueError, match=match):
@@ -242,3 +255,15 @@ def test_fixture_lubkin_table_matches_contact_theory(torque_ratio):
     a = float(TIP.contact_radius(P))
     exact = lubkin_twist(torque_ratio * mu * P * a, P, mu, a, G)
     assert TIP.rotational_scale(P) * normalized_lubkin_twist(torque_ratio) == pytest.approx(exact, rel=1e-4)
+
+
+def test_a_switched_off_rotational_channel_does_not_hold_the_force_up():
+    # With rotational detection off, a large twist reading must not stop the translational share from draining
+    # to where its own target puts it: at |u_x| = u_ref / 2 the force falls (the law's increment is negative).
+    controller = GraspForceController(GraspForceParameters(rotational_slip_detection=False), REFERENCES)
+    controller.minimum_force, controller.components, controller.command = 0.2, np.array([2.0, 0.0]), 2.2
+    u_ref, theta_ref = controller.generator.references(GraspPhase.HOLD, controller.command)
+    for _ in range(200):                       # 0.2 s: the filter settles on the constant readings
+        controller.step(0.5 * u_ref, 10.0 * theta_ref, 9, GraspPhase.HOLD)
+    assert controller.command < 0.9 * 2.2      # off: drains; the old code held it at 2.2 exactly
+    assert controller.components[1] == 0.0
