@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fem.elasticity import VOLUMETRIC_FORMULATIONS
 from fem.validation import check_positive, check_range
 
 if sys.version_info >= (3, 11):
@@ -154,7 +155,11 @@ class ContactSpec:
 
 @dataclass(frozen=True)
 class MeshSettings:
-    """Element size where contact can occur and far from it [mm], element order; fine zone radius (auto if None)."""
+    """Element size where contact can occur and far from it [mm], element order; fine zone radius (auto if None).
+
+    ``volumetric``: "standard" (lambda tr(eps)^2 per element; P1 locks above nu ~ 0.49, P2 partly) or
+    "nodal_average" (P1 only: average-nodal-pressure tets, locking-free for nu -> 0.5; fem.elasticity).
+    """
 
     size_contact: float = 0.15
     size_far: float = 4.0
@@ -162,12 +167,18 @@ class MeshSettings:
     fine_radius: float | None = None
     grading: float = 0.5
     size_base: float | None = None    # element size on the sensor plane [mm] (curved gels; None: size_far)
+    volumetric: str = "standard"
 
     def __post_init__(self):
         check_positive("mesh.size_contact", self.size_contact, "mm")
         check_positive("mesh.size_far", self.size_far, "mm")
         if self.order not in (1, 2):
             raise ValueError(f"mesh.order={self.order!r} is not one of [1, 2]")
+        if self.volumetric not in VOLUMETRIC_FORMULATIONS:
+            raise ValueError(f"mesh.volumetric={self.volumetric!r} is not one of {sorted(VOLUMETRIC_FORMULATIONS)}")
+        if self.volumetric == "nodal_average" and self.order != 1:
+            raise ValueError(f"mesh.volumetric={self.volumetric!r} needs mesh.order=1 (P1 tets), got "
+                             f"mesh.order={self.order}; use mesh.volumetric='standard' with P2")
         if self.fine_radius is not None:
             check_positive("mesh.fine_radius", self.fine_radius, "mm")
         if self.size_base is not None:

@@ -100,7 +100,9 @@ def _gel_mesh(scene: Scene, fine_radius: float, half: bool):
 def preparation_key(scene: Scene) -> tuple:
     """Hashable key of everything ``prepare`` depends on: scenes with equal keys can share one Prepared."""
     fine_radius, half = _fine_radius_and_half(scene)
-    return (scene.gel, scene.material, scene.mesh, scene.body.center, round(fine_radius, 12), half)
+    # scene.mesh holds mesh.volumetric too; named again so that no refactoring of MeshSettings can drop it
+    return (scene.gel, scene.material, scene.mesh, scene.mesh.volumetric, scene.body.center, round(fine_radius, 12),
+            half)
 
 
 LOCKING_NU = 0.49     # above this tets lock: the stability study finds c/a ~0.1 low and a 12-21 % small (P1)
@@ -108,11 +110,12 @@ LOCKING_NU = 0.49     # above this tets lock: the stability study finds c/a ~0.1
 
 def prepare(scene: Scene) -> Prepared:
     """Mesh the gel, assemble K and factorize it once (reused by every increment and by scenes of equal key)."""
-    if scene.material.nu > LOCKING_NU:
+    if scene.material.nu > LOCKING_NU and scene.mesh.volumetric == "standard":
         import warnings
 
         warnings.warn(f"material.nu={scene.material.nu} > {LOCKING_NU}: tetrahedra lock (P1 badly, P2 partly; "
-                      f"studies stability measures c/a about 0.1 low); results are not reliable", stacklevel=2)
+                      f"studies stability measures c/a about 0.1 low); results are not reliable: use "
+                      f"mesh.volumetric='nodal_average' (P1)", stacklevel=2)
     timings = {}
     start = time.perf_counter()
     fine_radius, half = _fine_radius_and_half(scene)
@@ -120,7 +123,7 @@ def prepare(scene: Scene) -> Prepared:
     timings["mesh"] = time.perf_counter() - start
     start = time.perf_counter()
     model = assemble_elastic_model(mesh, scene.material.E, scene.material.nu, scene.mesh.order,
-                                   symmetry_plane_y=0.0 if half else None)
+                                   symmetry_plane_y=0.0 if half else None, volumetric=scene.mesh.volumetric)
     timings["assembly"] = time.perf_counter() - start
     start = time.perf_counter()
     factorization = SpdFactorization(model.stiffness_free)
@@ -128,6 +131,7 @@ def prepare(scene: Scene) -> Prepared:
     quality = mesh_quality(mesh.p, mesh.t)
     mesh_info = {"nodes": int(mesh.p.shape[1]), "elements": int(mesh.t.shape[1]), "dofs": int(model.n_dofs),
                  "free_dofs": int(model.free_dofs.size), "order": scene.mesh.order,
+                 "volumetric": scene.mesh.volumetric, "stiffness_nonzeros": int(model.stiffness_free.nnz),
                  "top_points": int(model.top.areas.size), "min_dihedral_deg": quality.min_dihedral_deg,
                  "min_radius_ratio": quality.min_radius_ratio, "fine_radius": fine_radius,
                  "solver_backend": factorization.backend, "half_model": half}

@@ -1,4 +1,9 @@
-"""Linear elasticity on tetrahedra (P1, P2): stiffness, fixed base, top-surface contact points and base traction."""
+"""Linear elasticity on tetrahedra (P1, P2): stiffness, fixed base, top-surface contact points and base traction.
+
+Volumetric term: ``standard`` integrates lambda tr(eps) tr(eps) per element; ``nodal_average`` (P1 only) is the
+average-nodal-pressure tetrahedron of Bonet & Burton (Commun. Numer. Meth. Eng. 14, 1998, 437-449), which does
+not lock for nu -> 0.5.
+"""
 
 from __future__ import annotations
 
@@ -6,12 +11,16 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.sparse as sp
-from skfem import Basis, BilinearForm, ElementTetP1, ElementTetP2, ElementVector, asm
-from skfem.helpers import ddot, sym_grad, trace
+from skfem import Basis, BilinearForm, ElementTetP1, ElementTetP2, ElementVector, LinearForm, asm
+from skfem.helpers import ddot, div, sym_grad, trace
 
 from fem.validation import check_choice, check_positive, check_range
 
-__all__ = ["ElasticModel", "SurfacePoints", "assemble_elastic_model", "elastic_stiffness", "lame_parameters"]
+__all__ = ["ElasticModel", "SurfacePoints", "VOLUMETRIC_FORMULATIONS", "assemble_elastic_model", "assemble_stiffness",
+           "divergence_pairing", "elastic_stiffness", "lame_parameters", "nodal_average_volumetric_stiffness",
+           "nodal_volume"]
+
+VOLUMETRIC_FORMULATIONS = ("standard", "nodal_average")
 
 
 def lame_parameters(youngs_modulus: float, poissons_ratio: float) -> tuple[float, float]:
@@ -28,6 +37,38 @@ def elastic_stiffness(u, v, p):
     """a(u, v) = int sigma(eps(u)) : eps(v) dV, sigma = 2 G eps + lambda tr(eps) I  [N mm]."""
     eps_u, eps_v = sym_grad(u), sym_grad(v)
     return 2.0 * p["shear_modulus"] * ddot(eps_u, eps_v) + p["lame_lambda"] * trace(eps_u) * trace(eps_v)
+
+
+@BilinearForm
+def divergence_pairing(u, q, p):
+    """b(u, q) = int q div(u) dV: vector displacement u against a scalar pressure test function q; B entries [mm^2]."""
+    return div(u) * q
+
+
+@LinearForm
+def nodal_volume(q, p):
+    """V_n = int phi_n dV, the lumped (row-sum) P1 mass: the volume a node carries [mm^3]."""
+    return q
+
+
+def nodal_average_volumetric_stiffness(basis: Basis, lame_lambda: float) -> sp.csr_matrix:
+    """Volumetric stiffness B^T diag(lambda / V_n) B [N/mm] of the average-nodal-pressure tetrahedron.
+
+    It is the P1-P1 mixed u-p form (pressure p_n at the vertices, M p = lambda B u) with the pressure mass M
+    lumped to diag(V_n) and p condensed: p_n = lambda (B u)_n / V_n, the volume-weighted mean of lambda div(u) over
+    the tets around node n (Bonet & Burton 1998). Exact for uniform volumetric strain: div(u) = theta gives
+    (B u)_n = theta V_n, so p = lambda theta everywhere and, as sum_n phi_n = 1, the pairing with any test field
+    equals the standard int lambda theta div(v) dV. Why it does not lock: the standard P1 form penalises div(u)
+    in every tet, about 5 constraints per node (4.6-5.3 tets per node on the graded block meshes) against 3
+    displacement dofs, so as lambda -> inf almost no displacement field is left free; here there is one
+    constraint per node. Being lambda / V_n >= 0 times B^T B it is symmetric positive semi-definite, so
+    2 G eps:eps + this stays SPD. B^T B couples second neighbours: about 5x the nonzeros of P1 K, 5x the fill
+    of its factor, 6-8x the factorization time.
+    """
+    pressure_basis = basis.with_element(ElementTetP1())                  # same quadrature as ``basis``
+    pairing = asm(divergence_pairing, basis, pressure_basis).tocsr()   # (n_vertices, n_dofs)
+    volumes = asm(nodal_volume, pressure_basis)                         # (n_vertices,)
+    return (pairing.T @ sp.diags(lame_lambda / volumes) @ pairing).tocsr()
 
 
 @dataclass
@@ -47,6 +88,7 @@ class ElasticModel:
     mesh: object
     basis: Basis
     order: int
+    volumetric: str                    # "standard" or "nodal_average" (VOLUMETRIC_FORMULATIONS)
     stiffness_free: sp.csr_matrix      # K restricted to free dofs
     stiffness_fixed_free: sp.csr_matrix  # rows: base dofs, cols: free dofs (for base reactions)
     free_dofs: np.ndarray
@@ -120,17 +162,34 @@ def _face_points(basis: Basis, order: int, face_facets: np.ndarray) -> SurfacePo
     return SurfacePoints(positions=xyz, dofs=dof_table, areas=areas, triangles=local)
 
 
+def assemble_stiffness(basis: Basis, youngs_modulus: float, poissons_ratio: float,
+                       volumetric: str = "standard") -> sp.csr_matrix:
+    """K [N/mm] on every dof of a vector P1/P2 basis, with the chosen volumetric term (no boundary conditions)."""
+    check_choice("volumetric", volumetric, VOLUMETRIC_FORMULATIONS)
+    scalar_element = type(getattr(basis.elem, "elem", basis.elem))
+    if volumetric == "nodal_average" and scalar_element is not ElementTetP1:
+        # P2 with vertex pressures (lumped Taylor-Hood) is locking-free too, but B^T B couples every P2 dof with
+        # the stars of the neighbouring vertices: measured 10x the nonzeros and 15x the factorization time of P2
+        raise ValueError(f"volumetric={volumetric!r} needs P1 tets (ElementTetP1), got {scalar_element.__name__}")
+    lame_lambda, shear_modulus = lame_parameters(youngs_modulus, poissons_ratio)
+    if volumetric == "standard":
+        return asm(elastic_stiffness, basis, lame_lambda=lame_lambda, shear_modulus=shear_modulus).tocsr()
+    return (asm(elastic_stiffness, basis, lame_lambda=0.0, shear_modulus=shear_modulus)
+            + nodal_average_volumetric_stiffness(basis, lame_lambda)).tocsr()
+
+
 def assemble_elastic_model(mesh, youngs_modulus: float, poissons_ratio: float, order: int = 1,
-                           symmetry_plane_y: float | None = None) -> ElasticModel:
+                           symmetry_plane_y: float | None = None, volumetric: str = "standard") -> ElasticModel:
     """Assemble K [N/mm] for P1 or P2 tets; the base (lowest z) is fixed, the top (z = 0) is the contact side.
 
     With ``symmetry_plane_y`` the mesh is half of a mirror-symmetric body: u_y = 0 on that plane.
+    ``volumetric="nodal_average"`` (P1 only) replaces the element-wise lambda term by the locking-free
+    average-nodal-pressure one (``nodal_average_volumetric_stiffness``).
     """
     check_choice("order", order, (1, 2))
-    lame_lambda, shear_modulus = lame_parameters(youngs_modulus, poissons_ratio)
     element = ElementVector(ElementTetP1() if order == 1 else ElementTetP2())
     basis = Basis(mesh, element, intorder=2 * (order - 1) if order > 1 else 1)
-    stiffness = asm(elastic_stiffness, basis, lame_lambda=lame_lambda, shear_modulus=shear_modulus).tocsr()
+    stiffness = assemble_stiffness(basis, youngs_modulus, poissons_ratio, volumetric)
     z_base = float(mesh.p[2].min())
     tol = 1e-9 * max(1.0, float(np.ptp(mesh.p)))
     fixed = basis.get_dofs(lambda x: np.abs(x[2] - z_base) < tol).all()
@@ -147,7 +206,7 @@ def assemble_elastic_model(mesh, youngs_modulus: float, poissons_ratio: float, o
     top = _face_points(basis, order, boundary[~on_base & (normals[:, 2] > 0.25)])
     base = _face_points(basis, order, boundary[on_base])
     return ElasticModel(
-        mesh=mesh, basis=basis, order=order,
+        mesh=mesh, basis=basis, order=order, volumetric=volumetric,
         stiffness_free=stiffness[free][:, free].tocsr(),
         stiffness_fixed_free=stiffness[fixed][:, free].tocsr(),
         free_dofs=free, fixed_dofs=fixed, top=top, base=base,

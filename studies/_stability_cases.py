@@ -1,6 +1,7 @@
 """The stability study's cases: a sphere pressed on a block, then sheared or twisted, pushed to the edges of the
-solver's range (nu -> 0.5, modulus contrast, friction, load ratio near gross slip, load size, mesh grading), and
-each result compared with the closed-form theory it should follow.
+solver's range (nu -> 0.5 with P1, P2 and the locking-free P1 nodal-average option, modulus contrast, friction,
+load ratio near gross slip, load size, mesh grading), and each result compared with the closed-form theory it
+should follow.
 
 Every case starts from ``BASE`` (sphere R = 10 mm on a 20 x 20 x 10 mm block, E = 1 MPa, nu = 0.45, mu = 0.5,
 P = 0.2 N, frictionless press: no Spence pre-slip, so Cattaneo-Mindlin and Lubkin apply, THEORY.md sec. 5).
@@ -49,9 +50,12 @@ class StabilityCase:
 
 
 CASES = (
-    *(StabilityCase("poisson", f"nu={nu} P{order}", (("material.nu", nu), ("mesh.order", order)),
-                    quick=(nu == 0.4999))
-      for nu in (0.49, 0.499, 0.4999) for order in (1, 2)),
+    # standard P1 and P2 lock as nu -> 0.5; P1 with average nodal pressure (mesh.volumetric) should not
+    *(StabilityCase("poisson", f"nu={nu} {label}", (("material.nu", nu), ("mesh.order", order),
+                                                    ("mesh.volumetric", volumetric)), quick=(nu == 0.4999))
+      for nu in (0.49, 0.499, 0.4999)
+      for label, order, volumetric in (("P1", 1, "standard"), ("P2", 2, "standard"),
+                                       ("P1 nodal-average", 1, "nodal_average"))),
     StabilityCase("poisson", "nu=0.5 (excluded)", (("material.nu", 0.5),), expect="error", quick=True),
     *(StabilityCase("modulus", f"E={E:g} MPa, P={NORMAL_FORCE * E:g} N", (("material.E", E),), force_scale=E,
                     quick=E in (0.01, 1000.0))

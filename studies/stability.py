@@ -1,4 +1,5 @@
-"""Solver stability: nu -> 0.5 (P1, P2), modulus contrast, friction, load ratio near gross slip, load size, meshes.
+"""Solver stability: nu -> 0.5 (P1, P2, P1 nodal-average), modulus contrast, friction, load ratio near gross slip,
+load size, meshes.
 
 Each case (studies/_stability_cases.py) either converges, and its error against Cattaneo-Mindlin / Lubkin / Hertz
 is reported with the tolerance of THEORY.md sec. 6, or raises a clear error that is recorded with its message.
