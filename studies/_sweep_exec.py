@@ -4,6 +4,17 @@ dask.distributed LocalCluster, an existing scheduler, or in this process ("synch
 A task writes each case's record to ``cases_dir/<case_id>.json`` (atomically) as soon as the case is done and also
 returns the records, so an interrupted sweep keeps every finished case; on a cluster without a shared filesystem
 the client writes the returned records itself when the task ends.
+
+Across runs: a re-run of the same sweep prepares nothing, since every recorded case is skipped. The cases it does
+run (new axis values, --retry-failed, an interrupted group, every case after an upgrade) prepare again per group:
+curved gels read their fTetWild mesh from the disk cache (fem.mesh_cache; meshing is the slow step, 10-70 s); a
+block is bisected again (graded bisection is deterministic and took 0.3-0.6 s of a 1.3-2.9 s prepare in the
+example sweep, 8.6k-12.5k DOF, so it is not cached); the stiffness is assembled and factorized again. The
+factorization cannot go to disk: pypardiso keeps PARDISO's factors in MKL's memory (its ``pt`` holds raw
+addresses) and scipy's SuperLU refuses to pickle. Storing only K would save the assembly (about 1 s there) for a
+second cache to invalidate. The surface compliance columns, the largest share of a group's first solve (1.5-2.4 s
+there, ~16 s on HCM-1 as written), are plain arrays and could be stored keyed by mesh, material, candidate points
+and code version; not done yet.
 """
 
 from __future__ import annotations

@@ -38,7 +38,7 @@ else:  # pragma: no cover
     import tomli as tomllib
 
 __all__ = ["Output", "Case", "SweepSpec", "load_sweep", "sweep_from_dict", "increment_quantities",
-           "CASE_QUANTITIES", "DERIVED_QUANTITIES", "set_dotted"]
+           "CASE_QUANTITIES", "DERIVED_QUANTITIES", "set_dotted", "case_hash", "code_version"]
 
 TOP_KEYS = ("name", "description", "scene", "outputs", "grid", "list")
 SCENE_SECTIONS = ("gel", "material", "body", "contact", "mesh", "load")
@@ -317,8 +317,25 @@ def _build_cases(base: dict, grid, zipped) -> list[Case]:
     return cases
 
 
+PACKAGE = "fingertip-contact"
+
+
+def code_version() -> str:
+    """Installed version of the package (importlib.metadata), "unknown" when it runs from a source tree that was
+    never installed."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version(PACKAGE)
+    except PackageNotFoundError:
+        return "unknown"
+
+
 def case_hash(document: dict) -> str:
-    """Id of a case: SHA-256 of its scene document (base scene + parameters), name left out, 1 and 1.0 equal."""
+    """Id of a case: SHA-256 of its scene document (base scene + parameters; name left out, 1 and 1.0 equal) and of
+    the installed package version (``code_version()``), so that a re-run after an upgrade solves every case again
+    instead of skipping it on a record the old code wrote; the old records stay in cases/, unused. An editable
+    install changes the id only when the version in pyproject.toml is raised, not at every edit of the code."""
     def canonical(value):
         if isinstance(value, dict):
             return {k: canonical(v) for k, v in value.items() if k != "name" or value is not document}
@@ -328,5 +345,6 @@ def case_hash(document: dict) -> str:
             return float(value)
         return value
 
-    text = json.dumps(canonical(document), sort_keys=True, separators=(",", ":"))
+    text = json.dumps({"scene": canonical(document), "version": code_version()}, sort_keys=True,
+                      separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]

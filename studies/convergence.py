@@ -1,7 +1,8 @@
-"""Convergence on HCM-1: error against wall time for element size, element order and number of shear increments.
+"""Convergence: error against wall time for element size, element order and number of shear increments, on HCM-1
+and on the 3x3 fingertip of Figs. 6 and 9 (studies/_convergence_array.py; not in --quick), each knee marked.
 
-Errors: stick ratio against Cattaneo-Mindlin (largest over the shear increments), contact radius against Hertz,
-tangential shift against Mindlin; wall time is the whole solve (mesh, assembly, factorization, contact path).
+HCM-1 errors: stick ratio against Cattaneo-Mindlin (largest over the shear increments), contact radius against
+Hertz, tangential shift against Mindlin; wall time is the whole solve (mesh, assembly, factorization, contact path).
 """
 
 from __future__ import annotations
@@ -12,49 +13,13 @@ from pathlib import Path
 
 import numpy as np
 
+from studies._convergence_array import ARRAY_STUDIES, array_cases, solve_array_case
 from studies._output import save_figure, write_csv_atomic
 
 NAME = "convergence"
 SCENE = Path(__file__).parent / "scenes" / "hcm1.toml"
 TARGET_STICK_RATIO_ERROR = 0.02         # the solver issue's target for the HCM-1 path
 KNEE_FACTOR = 1.15                      # knee: cheapest mesh whose error is within 15 % of the best one
-
-
-ARRAY_SIZES = (0.9, 0.6, 0.4, 0.3)      # mm, element size at the bump tops of the 3x3 fingertip (not in --quick)
-ARRAY_LOAD_RATIO = 0.5
-
-
-def solve_array_case(size_contact: float) -> dict:
-    """The 3x3 fingertip of figs. 6 and 9 under a plate: press 2 N (frictionless), shear to Q/(mu P) = 0.5.
-
-    Errors: the array's stick ratio against Cattaneo-Mindlin (every bump carries Q/P = 0.5 of its own load) and
-    the mean bump contact radius against Hertz with an equal share P/9 (the base couples the bumps a little).
-    """
-    from contact.scene import ContactSpec, Load, LoadKind, MeshSettings
-    from contact.solver import solve_scene
-    from contact.theory import hertz, stick_ratio_translational
-    from studies import _fingertip as tip
-
-    base = tip.bench_scene(3, "shift", (0.1,), size_contact, tip.BENCH_SIZE_BASE)
-    scene = dataclasses.replace(
-        base, contact=ContactSpec(mu=tip.FRICTION, frictionless_press=True),
-        mesh=MeshSettings(size_contact=size_contact, size_far=3.0, size_base=tip.BENCH_SIZE_BASE),
-        loads=(Load(LoadKind.PRESS, "force", (tip.NORMAL_FORCE,)),
-               Load(LoadKind.SHEAR, "force", (ARRAY_LOAD_RATIO * tip.FRICTION * tip.NORMAL_FORCE,))))
-    start = time.perf_counter()
-    result = solve_scene(scene)
-    wall = time.perf_counter() - start
-    bumps = 9
-    radius = float(hertz(tip.NORMAL_FORCE / bumps, scene.gel.geometry.bump_radius,
-                         scene.material.effective_modulus).contact_radius)
-    contact_radius = float(np.sqrt(result.increments[0].contact_area / (bumps * np.pi)))
-    stick_error = result.increments[1].stick_ratio - float(stick_ratio_translational(ARRAY_LOAD_RATIO, 2))
-    return dict(study="3x3 fingertip (P1)", size_contact=size_contact, order=1, n_shear=1,
-                dofs=result.mesh_info["dofs"], elements=result.mesh_info["elements"],
-                compliance_columns=result.timings["compliance_columns"], wall_time=wall,
-                stick_ratio_error=abs(stick_error), stick_ratio_error_signed=stick_error,
-                final_stick_ratio_error=stick_error, contact_radius_error=contact_radius / radius - 1.0,
-                shift_error=float("nan"))
 
 
 def _cases(quick: bool) -> list[dict]:
@@ -95,15 +60,25 @@ def solve_case(size_contact: float, order: int, n_shear: int) -> dict:
                    for r, inc in zip(ratios, shear_increments)]
     return dict(dofs=result.mesh_info["dofs"], elements=result.mesh_info["elements"],
                 compliance_columns=result.timings["compliance_columns"], wall_time=wall,
-                stick_ratio_error=float(np.max(np.abs(stick_error))),
+                mesh_time=float(result.timings["mesh"]), stick_ratio_error=float(np.max(np.abs(stick_error))),
                 stick_ratio_error_signed=float(stick_error[int(np.argmax(np.abs(stick_error)))]),
                 final_stick_ratio_error=float(stick_error[-1]),
                 contact_radius_error=float(result.increments[0].contact_radius / float(reference.contact_radius) - 1),
                 shift_error=float(np.max(np.abs(shift_error))))
 
 
+def knee(rows: list[dict], factor: float = KNEE_FACTOR) -> dict | None:
+    """The cheapest row (least wall_time) whose stick_ratio_error is within ``factor`` x the best of ``rows``: past
+    it, finer meshes buy little more. None for no rows."""
+    if not rows:
+        return None
+    best = min(r["stick_ratio_error"] for r in rows)
+    return min((r for r in rows if r["stick_ratio_error"] <= factor * best), key=lambda r: r["wall_time"])
+
+
 def run(out_dir, quick: bool = False) -> dict:
-    """Run every case, write convergence.csv / .png / .pdf, and mark the knee of the P1 error-time curve."""
+    """Run every case, write convergence.csv / .png / .pdf, and mark the knee of the P1 error-time curves of HCM-1
+    and (not in --quick) of the 3x3 fingertip."""
     from tqdm import tqdm
 
     out_dir = Path(out_dir)
@@ -111,40 +86,44 @@ def run(out_dir, quick: bool = False) -> dict:
     for case in tqdm(_cases(quick), desc=NAME, unit="case"):
         rows.append({**case, **solve_case(**{k: case[k] for k in ("size_contact", "order", "n_shear")})})
         write_csv_atomic(out_dir / f"{NAME}.csv", rows)          # keep what is done if a later case fails
-    for size in (() if quick else tqdm(ARRAY_SIZES, desc=f"{NAME} (3x3 fingertip)", unit="case")):
-        rows.append(solve_array_case(size))
+    for case in (() if quick else tqdm(array_cases(), desc=f"{NAME} (3x3 fingertip)", unit="case")):
+        rows.append({**case, **solve_array_case(**{k: case[k] for k in ("size_contact", "order", "n_shear")})})
         write_csv_atomic(out_dir / f"{NAME}.csv", rows)
-    array_rows = [r for r in rows if r["study"] == "3x3 fingertip (P1)"]
-    if array_rows:
-        best_array = min(r["stick_ratio_error"] for r in array_rows)
-        array_knee = min((r for r in array_rows if r["stick_ratio_error"] <= KNEE_FACTOR * best_array),
-                         key=lambda r: r["wall_time"])
-        print(f"{NAME}: 3x3 fingertip knee: size_contact = {array_knee['size_contact']} mm "
-              f"({array_knee['wall_time']:.1f} s, stick-ratio error {array_knee['stick_ratio_error']:.4f})")
-    sizes = [r for r in rows if r["study"] == "element size (P1)"]
-    best = min(r["stick_ratio_error"] for r in sizes)
-    # the knee: the cheapest P1 mesh within 15 % of the best error seen (finer meshes buy little more)
-    knee = min((r for r in sizes if r["stick_ratio_error"] <= KNEE_FACTOR * best), key=lambda r: r["wall_time"])
+    hcm1_knee = knee([r for r in rows if r["study"] == "element size (P1)"])
+    array_knee = knee([r for r in rows if r["study"] == ARRAY_STUDIES[0]])     # P1 sizes, as HCM-1
     for row in rows:
-        row["knee"] = row is knee
+        row["knee"] = row is hcm1_knee or row is array_knee
     write_csv_atomic(out_dir / f"{NAME}.csv", rows)
-    save_figure(_plot(rows, knee), out_dir, NAME)
-    print(f"{NAME}: knee (cheapest P1 mesh within {KNEE_FACTOR:.2f}x of the best stick-ratio error): size_contact = "
-          f"{knee['size_contact']} mm ({knee['wall_time']:.1f} s, error {knee['stick_ratio_error']:.4f})")
+    save_figure(_plot(rows, hcm1_knee, array_knee), out_dir, NAME)
+    for label, point in (("HCM-1", hcm1_knee), ("3x3 fingertip", array_knee)):
+        if point is not None:
+            print(f"{NAME}: {label} knee (cheapest P1 mesh within {KNEE_FACTOR:.2f}x of the best stick-ratio "
+                  f"error): size_contact = {point['size_contact']} mm ({point['wall_time']:.1f} s, error "
+                  f"{point['stick_ratio_error']:.4f})")
     finest = min((r for r in rows if r["study"] == "element size (P1)"), key=lambda r: r["size_contact"])
-    return {"max_error": finest["stick_ratio_error"],
-            "error_meaning": f"stick-ratio error against Cattaneo-Mindlin on the finest P1 mesh, "
-                             f"size_contact = {finest['size_contact']} mm"}
+    summary = {"max_error": finest["stick_ratio_error"],
+               "error_meaning": f"stick-ratio error against Cattaneo-Mindlin on the finest P1 mesh, "
+                                f"size_contact = {finest['size_contact']} mm",
+               "knee_size_contact": hcm1_knee["size_contact"]}
+    if array_knee is not None:
+        summary["array_knee_size_contact"] = array_knee["size_contact"]
+    return summary
 
 
-def _plot(rows: list[dict], knee: dict | None):
+def _plot(rows: list[dict], hcm1_knee: dict | None, array_knee: dict | None = None):
+    """HCM-1 (top row: c/a, a and shift errors against wall time) and, when run, the 3x3 fingertip (bottom row:
+    c/a and bump-radius errors against wall time, then wall time against DOF for every case)."""
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import NullFormatter
 
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.6))
+    from studies._convergence_array import plot_array
+
+    with_array = any(r["study"] in ARRAY_STUDIES for r in rows)
+    fig, grid = plt.subplots(2 if with_array else 1, 3, figsize=(15, 9.2 if with_array else 4.6), squeeze=False)
+    axes = grid[0]
     metrics = (("stick_ratio_error", "max |c/a - Cattaneo-Mindlin|"), ("contact_radius_error", "a / a_Hertz - 1"),
                ("shift_error", "max |shift / Mindlin - 1|"))
-    markers = {"element size (P1)": "o-", "element order (P2)": "s-", "shear increments": "^--",
-               "3x3 fingertip (P1)": "D-"}
+    markers = {"element size (P1)": "o-", "element order (P2)": "s-", "shear increments": "^--"}
     for axis, (key, label) in zip(axes, metrics):
         for study, style in markers.items():
             subset = [r for r in rows if r["study"] == study]
@@ -157,13 +136,27 @@ def _plot(rows: list[dict], knee: dict | None):
                 axis.annotate(tag, (r["wall_time"], v), textcoords="offset points", xytext=(4, 3), fontsize=7)
         if key == "stick_ratio_error":
             axis.axhline(TARGET_STICK_RATIO_ERROR, color="grey", ls=":", label=f"target {TARGET_STICK_RATIO_ERROR}")
-            if knee:
-                axis.plot(knee["wall_time"], knee["stick_ratio_error"], "r*", ms=16,
+            if hcm1_knee:
+                axis.plot(hcm1_knee["wall_time"], hcm1_knee["stick_ratio_error"], "r*", ms=16,
                           label=f"knee: cheapest within {KNEE_FACTOR:.2f}x best")
         axis.set_xlabel("wall time [s]")
         axis.set_ylabel(label)
         axis.grid(True, which="both", alpha=0.3)
     axes[0].legend(fontsize=8)
-    fig.suptitle("HCM-1 (sphere R = 10 mm on a 40x40x20 mm block, nu = 0.45, mu = 0.5): error against run time")
+    axes[0].set_title("HCM-1 (sphere R = 10 mm on a 40x40x20 mm block, nu = 0.45, mu = 0.5)", fontsize=9)
+    if with_array:
+        plot_array(grid[1][:2], rows, array_knee, KNEE_FACTOR)
+        cost = grid[1][2]
+        for study in list(markers) + list(ARRAY_STUDIES):
+            subset = [r for r in rows if r["study"] == study]
+            if subset:
+                cost.loglog([r["dofs"] for r in subset], [r["wall_time"] for r in subset], "o", label=study)
+        cost.set_xlabel("degrees of freedom")
+        cost.set_ylabel("wall time [s]")
+        cost.grid(True, which="both", alpha=0.3)
+        cost.legend(fontsize=7)
+    for axis in fig.axes:                      # log axes spanning under a decade would label every minor tick
+        axis.xaxis.set_minor_formatter(NullFormatter())
+    fig.suptitle("Error against run time")
     fig.tight_layout()
     return fig

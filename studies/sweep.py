@@ -4,7 +4,8 @@ The sweep file gives a base scene, axes on dotted scene keys ([grid]: cartesian 
 outputs to record (format: studies/_sweep_spec.py; example: studies/sweeps/stick_ratio_E_mu.toml). Cases that share
 a mesh and factorization (contact.preparation_key) run as one task that prepares once. Writes DIR/cases/<id>.json
 as each case finishes, DIR/sweep.parquet and DIR/sweep.csv (one row per case: parameters, outputs, status,
-timings, error) and DIR/sweep.png/.pdf. A re-run skips the cases already recorded (id = hash of the case's scene).
+timings, error) and DIR/sweep.png/.pdf. A re-run skips the cases already recorded (id = hash of the case's scene and
+of the package version, so an upgrade solves them again).
 """
 
 from __future__ import annotations
@@ -85,7 +86,7 @@ def run(out_dir, quick: bool = False, sweep_file: Path | None = None, scheduler:
     from tqdm import tqdm
 
     from studies._sweep_exec import check_scheduler, connect, plan_tasks
-    from studies._sweep_spec import load_sweep
+    from studies._sweep_spec import code_version, load_sweep
     from studies._sweep_table import case_row, plot_sweep, write_table
 
     if sweep_file is None:
@@ -100,7 +101,8 @@ def run(out_dir, quick: bool = False, sweep_file: Path | None = None, scheduler:
     cases_dir.mkdir(parents=True, exist_ok=True)
     write_json_atomic(out_dir / f"{NAME}.json", {
         "name": spec.name, "source": spec.source, "grid": dict(spec.grid), "list": dict(spec.zipped),
-        "outputs": [o.text for o in spec.outputs], "cases": len(spec.cases), "base_scene": spec.base_document})
+        "outputs": [o.text for o in spec.outputs], "cases": len(spec.cases), "base_scene": spec.base_document,
+        "version": code_version()})
     records = {}
     for case in spec.cases:
         record = _read_record(cases_dir / f"{case.case_id}.json")

@@ -104,6 +104,18 @@ def test_valid_sweep_builds_every_case(tmp_path):
     assert spec.cases[3].scene.loads[1].values == (0.05,) and spec.cases[3].scene.material.E == 2.0
 
 
+def test_case_id_changes_with_the_package_version(tmp_path, monkeypatch):
+    import importlib.metadata
+
+    before = [case.case_id for case in _check(tmp_path).cases]
+    assert [case.case_id for case in _check(tmp_path).cases] == before           # stable for one version
+    real_version = importlib.metadata.version
+    monkeypatch.setattr(importlib.metadata, "version",
+                        lambda name: "99.0" if name == "fingertip-contact" else real_version(name))
+    after = [case.case_id for case in _check(tmp_path).cases]
+    assert len(set(after)) == len(after) and not set(after) & set(before)      # an upgrade re-runs every case
+
+
 @pytest.mark.parametrize("changes, match", [
     (dict(colour="red"), r"unknown top-level key\(s\) \['colour'\]"),
     (dict(scene=None), "scene is missing"),
