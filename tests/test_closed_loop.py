@@ -21,6 +21,14 @@ def test_importing_the_packages_does_not_import_mujoco():
     subprocess.run([sys.executable, "-c", code], check=True)
 
 
+@pytest.mark.parametrize("field, value", [("friction", 0.0), ("load_ratio", 1.0), ("torque_ratio", -0.2)])
+def test_bad_target_design_names_the_key(field, value):
+    from studies._grasp_world import TargetDesign
+
+    with pytest.raises(ValueError, match=f"targets.{field}={value} outside"):
+        TargetDesign(**{field: value})
+
+
 mujoco = pytest.importorskip("mujoco")
 
 
@@ -47,5 +55,6 @@ def test_moment_turns_the_object_out_of_the_grasp_without_rotational_detection()
     with_detection = run_trial(bottle, TrialSettings(friction=0.4, **SHORT))
     rotation = lambda result: max(abs(r) for r in result.trace["rotation"])          # [rad]
     assert rotation(without) > 0.1 and not without.success                  # rotated out, its end on the table
-    assert with_detection.success and rotation(with_detection) < 0.05
+    assert without.rotated and without.max_rotation_mrad > 100.0
+    assert with_detection.success and rotation(with_detection) < 0.05 and not with_detection.rotated
     assert with_detection.hold_force_mean > required_grip_force(bottle, 0.4) > without.hold_force_mean
