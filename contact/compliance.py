@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from fem.elasticity import ElasticModel
-from fem.linear_solver import SpdFactorization
+from fem.linear_solver import SaddlePointFactorization, SpdFactorization
 
 __all__ = ["SurfaceCompliance"]
 
@@ -22,13 +22,14 @@ class SurfaceCompliance:
     Parameters
     ----------
     model : ElasticModel
-    factorization : SpdFactorization of ``model.stiffness_free``
+    factorization : whose ``solve`` applies ``model.stiffness_free``^-1 (``contact.solver.factorize_stiffness``:
+        of K itself, or of the nodal-average saddle-point system)
     points : (n,) indices into ``model.top`` of the candidate points
     components : dof components carried per point, (0, 1, 2) for x, y, z or (2,) for normal-only contact
     """
 
-    def __init__(self, model: ElasticModel, factorization: SpdFactorization, points: np.ndarray,
-                 components: tuple[int, ...] = (0, 1, 2)):
+    def __init__(self, model: ElasticModel, factorization: SpdFactorization | SaddlePointFactorization,
+                 points: np.ndarray, components: tuple[int, ...] = (0, 1, 2)):
         self.model = model
         self.factorization = factorization
         self.points = np.asarray(points)

@@ -16,9 +16,9 @@ from skfem.helpers import ddot, div, sym_grad, trace
 
 from fem.validation import check_choice, check_positive, check_range
 
-__all__ = ["ElasticModel", "SurfacePoints", "VOLUMETRIC_FORMULATIONS", "assemble_elastic_model", "assemble_stiffness",
-           "divergence_pairing", "elastic_stiffness", "lame_parameters", "nodal_average_volumetric_stiffness",
-           "nodal_volume"]
+__all__ = ["ElasticModel", "SaddlePointBlocks", "SurfacePoints", "VOLUMETRIC_FORMULATIONS", "assemble_elastic_model",
+           "assemble_stiffness", "divergence_pairing", "elastic_stiffness", "lame_parameters",
+           "nodal_average_volumetric_stiffness", "nodal_volume"]
 
 VOLUMETRIC_FORMULATIONS = ("standard", "nodal_average")
 
@@ -51,6 +51,12 @@ def nodal_volume(q, p):
     return q
 
 
+def _pairing_and_nodal_volumes(basis: Basis) -> tuple[sp.csr_matrix, np.ndarray]:
+    """B [mm^2] (n_vertices, n_dofs) of ``divergence_pairing`` and the nodal volumes V_n [mm^3] (n_vertices,)."""
+    pressure_basis = basis.with_element(ElementTetP1())                  # same quadrature as ``basis``
+    return asm(divergence_pairing, basis, pressure_basis).tocsr(), asm(nodal_volume, pressure_basis)
+
+
 def nodal_average_volumetric_stiffness(basis: Basis, lame_lambda: float) -> sp.csr_matrix:
     """Volumetric stiffness B^T diag(lambda / V_n) B [N/mm] of the average-nodal-pressure tetrahedron.
 
@@ -62,13 +68,31 @@ def nodal_average_volumetric_stiffness(basis: Basis, lame_lambda: float) -> sp.c
     in every tet, about 5 constraints per node (4.6-5.3 tets per node on the graded block meshes) against 3
     displacement dofs, so as lambda -> inf almost no displacement field is left free; here there is one
     constraint per node. Being lambda / V_n >= 0 times B^T B it is symmetric positive semi-definite, so
-    2 G eps:eps + this stays SPD. B^T B couples second neighbours: about 5x the nonzeros of P1 K, 5x the fill
-    of its factor, 6-8x the factorization time.
+    2 G eps:eps + this stays SPD.
+
+    Cost: B^T B couples second neighbours, so this condensed K has 5x the nonzeros of P1 K and its factor 5x the
+    fill, with factorization 3.5-4.5x and 256 back-substitutions 3x slower. The contact solver therefore never
+    factorizes it: it factorizes the uncondensed saddle-point system [[K_G, B^T], [B, -diag(V_n / lambda)]]
+    (``ElasticModel.saddle_point``, ``fem.linear_solver.SaddlePointFactorization``): factor 1.9x the fill of P1
+    (3/8 of the condensed one), factorization 2x P1, 256 back-substitutions 0.7x P1 (no iterative refinement;
+    measured on the 26k-DOF stability block at nu = 0.4999: ``python -m studies benchmark --factorizations``).
+    This condensed K stays the model's stiffness for base reactions, energies and tests.
     """
-    pressure_basis = basis.with_element(ElementTetP1())                  # same quadrature as ``basis``
-    pairing = asm(divergence_pairing, basis, pressure_basis).tocsr()   # (n_vertices, n_dofs)
-    volumes = asm(nodal_volume, pressure_basis)                         # (n_vertices,)
+    pairing, volumes = _pairing_and_nodal_volumes(basis)
     return (pairing.T @ sp.diags(lame_lambda / volumes) @ pairing).tocsr()
+
+
+@dataclass
+class SaddlePointBlocks:
+    """The mixed u-p system whose pressure condensation is the nodal-average K on the free dofs.
+
+    [[K_G, B^T], [B, -diag(V_n / lambda)]] [u; p] = [f; 0] gives p = lambda B u / V_n and
+    (K_G + B^T diag(lambda / V_n) B) u = f, i.e. ``stiffness_free`` u = f.
+    """
+
+    shear_stiffness: sp.csr_matrix       # K_G = 2 G eps:eps on the free dofs [N/mm], (n_free, n_free), SPD
+    pairing: sp.csr_matrix               # B on all vertices x free dofs [mm^2], (n_vertices, n_free)
+    pressure_compliance: np.ndarray      # V_n / lambda [mm^3/MPa], (n_vertices,), > 0
 
 
 @dataclass
@@ -95,6 +119,9 @@ class ElasticModel:
     fixed_dofs: np.ndarray
     top: SurfacePoints                 # contact side: upward-facing boundary (z = 0 for a block)
     base: SurfacePoints                # sensor plane, z = -thickness
+    # nodal_average with lambda > 0 only: the uncondensed blocks of stiffness_free, which the contact solver
+    # factorizes instead of the denser condensed K (fem.linear_solver.SaddlePointFactorization)
+    saddle_point: SaddlePointBlocks | None = None
 
     @property
     def n_dofs(self) -> int:
@@ -162,9 +189,8 @@ def _face_points(basis: Basis, order: int, face_facets: np.ndarray) -> SurfacePo
     return SurfacePoints(positions=xyz, dofs=dof_table, areas=areas, triangles=local)
 
 
-def assemble_stiffness(basis: Basis, youngs_modulus: float, poissons_ratio: float,
-                       volumetric: str = "standard") -> sp.csr_matrix:
-    """K [N/mm] on every dof of a vector P1/P2 basis, with the chosen volumetric term (no boundary conditions)."""
+def _assemble(basis: Basis, youngs_modulus: float, poissons_ratio: float, volumetric: str):
+    """K [N/mm] on every dof and, for nodal_average, its parts (K_G [N/mm], B [mm^2], V_n [mm^3], lambda [MPa])."""
     check_choice("volumetric", volumetric, VOLUMETRIC_FORMULATIONS)
     scalar_element = type(getattr(basis.elem, "elem", basis.elem))
     if volumetric == "nodal_average" and scalar_element is not ElementTetP1:
@@ -173,9 +199,17 @@ def assemble_stiffness(basis: Basis, youngs_modulus: float, poissons_ratio: floa
         raise ValueError(f"volumetric={volumetric!r} needs P1 tets (ElementTetP1), got {scalar_element.__name__}")
     lame_lambda, shear_modulus = lame_parameters(youngs_modulus, poissons_ratio)
     if volumetric == "standard":
-        return asm(elastic_stiffness, basis, lame_lambda=lame_lambda, shear_modulus=shear_modulus).tocsr()
-    return (asm(elastic_stiffness, basis, lame_lambda=0.0, shear_modulus=shear_modulus)
-            + nodal_average_volumetric_stiffness(basis, lame_lambda)).tocsr()
+        return asm(elastic_stiffness, basis, lame_lambda=lame_lambda, shear_modulus=shear_modulus).tocsr(), None
+    shear_stiffness = asm(elastic_stiffness, basis, lame_lambda=0.0, shear_modulus=shear_modulus).tocsr()
+    pairing, volumes = _pairing_and_nodal_volumes(basis)
+    stiffness = (shear_stiffness + pairing.T @ sp.diags(lame_lambda / volumes) @ pairing).tocsr()
+    return stiffness, (shear_stiffness, pairing, volumes, lame_lambda)
+
+
+def assemble_stiffness(basis: Basis, youngs_modulus: float, poissons_ratio: float,
+                       volumetric: str = "standard") -> sp.csr_matrix:
+    """K [N/mm] on every dof of a vector P1/P2 basis, with the chosen volumetric term (no boundary conditions)."""
+    return _assemble(basis, youngs_modulus, poissons_ratio, volumetric)[0]
 
 
 def assemble_elastic_model(mesh, youngs_modulus: float, poissons_ratio: float, order: int = 1,
@@ -189,7 +223,7 @@ def assemble_elastic_model(mesh, youngs_modulus: float, poissons_ratio: float, o
     check_choice("order", order, (1, 2))
     element = ElementVector(ElementTetP1() if order == 1 else ElementTetP2())
     basis = Basis(mesh, element, intorder=2 * (order - 1) if order > 1 else 1)
-    stiffness = assemble_stiffness(basis, youngs_modulus, poissons_ratio, volumetric)
+    stiffness, parts = _assemble(basis, youngs_modulus, poissons_ratio, volumetric)
     z_base = float(mesh.p[2].min())
     tol = 1e-9 * max(1.0, float(np.ptp(mesh.p)))
     fixed = basis.get_dofs(lambda x: np.abs(x[2] - z_base) < tol).all()
@@ -205,9 +239,17 @@ def assemble_elastic_model(mesh, youngs_modulus: float, poissons_ratio: float, o
     # block that is its top face, for caps and bump arrays the whole upper surface
     top = _face_points(basis, order, boundary[~on_base & (normals[:, 2] > 0.25)])
     base = _face_points(basis, order, boundary[on_base])
+    saddle_point = None
+    if parts is not None and parts[3] > 0.0:
+        # every pressure node is kept, base and mirror-plane ones too: p_n = lambda (B u)_n / V_n holds at each node
+        # whatever u is fixed, and stiffness_free below is K_G,ff + B_f^T diag(lambda / V_n) B_f summed over all n.
+        # lambda <= 0 (nu <= 0) has no finite V_n / lambda > 0: the condensed K is factorized as before
+        shear_stiffness, pairing, volumes, lame_lambda = parts
+        saddle_point = SaddlePointBlocks(shear_stiffness=shear_stiffness[free][:, free].tocsr(),
+                                         pairing=pairing[:, free].tocsr(), pressure_compliance=volumes / lame_lambda)
     return ElasticModel(
         mesh=mesh, basis=basis, order=order, volumetric=volumetric,
         stiffness_free=stiffness[free][:, free].tocsr(),
         stiffness_fixed_free=stiffness[fixed][:, free].tocsr(),
-        free_dofs=free, fixed_dofs=fixed, top=top, base=base,
+        free_dofs=free, fixed_dofs=fixed, top=top, base=base, saddle_point=saddle_point,
     )

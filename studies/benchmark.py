@@ -3,6 +3,12 @@
 Reports medians over repeats of: mesh, assembly, factorization, compliance columns, the whole contact path, one
 plain linear solve (assembly + factorization + one back-substitution), their ratio (target <= 3) and the peak
 memory of the process. Timings are never asserted in tests: the machines are shared and noisy.
+
+``--factorizations`` compares instead, on the stability study's nu = 0.4999 half block (h = 0.15 mm; 0.3 mm with
+``--quick``), the three ways of factorizing the gel: standard P1 K, the nodal-average condensed K, and the
+nodal-average saddle-point system the solver uses (``contact.solver.factorize_stiffness``): nonzeros of the matrix
+and of its factor, factorization time and the time of 256 unit right-hand sides (compliance columns at the top
+points nearest the contact), in benchmark_factorizations.csv / .json.
 """
 
 from __future__ import annotations
@@ -13,24 +19,32 @@ import statistics
 import time
 from pathlib import Path
 
+import numpy as np
+
 from studies._output import write_csv_atomic, write_json_atomic
 
 NAME = "benchmark"
 SCENE = Path(__file__).parent / "scenes" / "hcm1.toml"
 TARGET_RATIO = 3.0
+RIGHT_HAND_SIDES = 256       # unit right-hand sides per timed multi-RHS solve (one chunk of the compliance columns)
 
 
 def add_arguments(parser) -> None:
     parser.add_argument("--repeats", type=int, default=3, help="solves per setting; medians are reported")
+    parser.add_argument("--factorizations", action="store_true",
+                        help="compare the factorizations of standard P1, nodal-average K and its saddle-point "
+                             "system on the stability block instead of timing HCM-1")
 
 
-def run(out_dir, quick: bool = False, repeats: int = 3) -> dict:
+def run(out_dir, quick: bool = False, repeats: int = 3, factorizations: bool = False) -> dict:
     """Time the HCM-1 path; write benchmark.csv (one row per repeat) and benchmark.json (medians)."""
     from contact.scene import load_scene
     from contact.solver import solve_scene
 
     if repeats < 1:
         raise ValueError(f"repeats={repeats!r} must be >= 1")
+    if factorizations:
+        return compare_factorizations(out_dir, quick, 1 if quick else repeats)
     scene = load_scene(SCENE)
     if quick:
         scene = dataclasses.replace(scene, mesh=dataclasses.replace(scene.mesh, size_contact=0.25))
@@ -60,3 +74,88 @@ def run(out_dir, quick: bool = False, repeats: int = 3) -> dict:
           f"({medians['linear_solve']:.2f} s; target {TARGET_RATIO:g}x), {medians['compliance_columns']} compliance "
           f"columns, peak memory {medians['peak_memory_mb']:.0f} MB (medians of {repeats})")
     return {}
+
+
+def _unit_right_hand_sides(model, count: int) -> np.ndarray:
+    """(n_free, count) unit loads on the free top-surface dofs nearest the origin (the contact centre)."""
+    free_position = np.full(model.n_dofs, -1)
+    free_position[model.free_dofs] = np.arange(model.free_dofs.size)
+    order = np.argsort(np.linalg.norm(model.top.positions[:, :2], axis=1))
+    rows = free_position[model.top.dofs[order]].ravel()
+    rows = rows[rows >= 0][:count]
+    rhs = np.zeros((model.free_dofs.size, rows.size))
+    rhs[rows, np.arange(rows.size)] = 1.0
+    return rhs
+
+
+def compare_factorizations(out_dir, quick: bool = False, repeats: int = 3) -> dict:
+    """Factorize standard P1 K, nodal-average K and its saddle-point system on one mesh; time 256 solves each.
+
+    Writes benchmark_factorizations.csv (one row per system and repeat) and benchmark_factorizations.json (medians
+    per system, and the largest difference of the saddle-point compliance columns to the condensed K's relative to
+    the largest entry); prints them side by side with the ratios to standard P1.
+    """
+    from contact import scene_from_dict
+    from contact.solver import factorize_stiffness, prepare
+    from fem.elasticity import assemble_elastic_model
+    from fem.linear_solver import SpdFactorization
+    from studies._stability_cases import StabilityCase, build_scene
+
+    if repeats < 1:
+        raise ValueError(f"repeats={repeats!r} must be >= 1")
+    case = StabilityCase("poisson", "nu=0.4999 P1 nodal-average",
+                         (("material.nu", 0.4999), ("mesh.volumetric", "nodal_average")))
+    document, _ = build_scene(case, quick)
+    scene = scene_from_dict(document)
+    prepared = prepare(scene)                  # the mesh and the nodal-average model the contact solver would use
+    prepared.factorization.release()
+    nodal = prepared.model
+    standard = assemble_elastic_model(nodal.mesh, scene.material.E, scene.material.nu, symmetry_plane_y=0.0
+                                      if prepared.half else None, volumetric="standard")
+    blocks = nodal.saddle_point
+    saddle_nonzeros = blocks.shear_stiffness.nnz + 2 * blocks.pairing.nnz + blocks.pressure_compliance.size
+    systems = {"P1 standard": (lambda: SpdFactorization(standard.stiffness_free), standard.stiffness_free.nnz),
+               "nodal-average condensed K": (lambda: SpdFactorization(nodal.stiffness_free),
+                                             nodal.stiffness_free.nnz),
+               "nodal-average saddle point": (lambda: factorize_stiffness(nodal), saddle_nonzeros)}
+    rhs = _unit_right_hand_sides(nodal, RIGHT_HAND_SIDES)
+    reference = {}
+    rows = []
+    for repeat in range(repeats):
+        for name, (factorize, matrix_nonzeros) in systems.items():
+            start = time.perf_counter()
+            factorization = factorize()
+            factorization_time = time.perf_counter() - start
+            start = time.perf_counter()
+            solution = factorization.solve(rhs)
+            solve_time = time.perf_counter() - start
+            backend, factor_nonzeros = factorization.backend, factorization.factor_nonzeros
+            factorization.release()
+            if name.startswith("nodal-average"):
+                reference.setdefault(name, solution)
+            rows.append(dict(system=name, repeat=repeat, free_dofs=factorization.size, backend=backend,
+                             matrix_nonzeros=matrix_nonzeros, factor_nonzeros=factor_nonzeros,
+                             factorization=factorization_time, solve=solve_time, right_hand_sides=rhs.shape[1]))
+    write_csv_atomic(Path(out_dir) / f"{NAME}_factorizations.csv", rows)
+    condensed = reference["nodal-average condensed K"]
+    difference = float(np.abs(reference["nodal-average saddle point"] - condensed).max() / np.abs(condensed).max())
+    summary = {"size_contact": scene.mesh.size_contact, "nu": scene.material.nu, "repeats": repeats,
+               "right_hand_sides": int(rhs.shape[1]), "saddle_point_vs_condensed_max_difference": difference}
+    for name in systems:
+        mine = [row for row in rows if row["system"] == name]
+        summary[name] = {key: statistics.median(row[key] for row in mine) for key in ("factorization", "solve")}
+        summary[name].update({key: mine[0][key] for key in ("free_dofs", "backend", "matrix_nonzeros",
+                                                             "factor_nonzeros")})
+    base = summary["P1 standard"]
+    print(f"{NAME}: factorizations, nu = {scene.material.nu} half block, h = {scene.mesh.size_contact} mm, "
+          f"{base['free_dofs']} free DOF, medians of {repeats}, {rhs.shape[1]} right-hand sides")
+    print(f"  {'system':28s} {'nnz(A)':>10s} {'nnz(factor)':>12s} {'factorize':>10s} {'solve':>8s}  vs P1")
+    for name in systems:
+        row = summary[name]
+        factor = f"{row['factor_nonzeros'] / 1e6:.2f}M" if row["factor_nonzeros"] else "-"
+        print(f"  {name:28s} {row['matrix_nonzeros'] / 1e6:9.2f}M {factor:>12s} {row['factorization']:9.2f}s "
+              f"{row['solve']:7.2f}s  {row['factorization'] / base['factorization']:.1f}x, "
+              f"{row['solve'] / base['solve']:.1f}x")
+    print(f"  saddle point vs condensed K: largest difference {difference:.1e} of the largest compliance entry")
+    write_json_atomic(Path(out_dir) / f"{NAME}_factorizations.json", summary)
+    return summary

@@ -1,5 +1,6 @@
 """The locking-free average-nodal-pressure tetrahedron (mesh.volumetric = "nodal_average"): patch tests, identity
-with standard P1 at lambda = 0, SPD, and nearly incompressible contact against Hertz and Cattaneo-Mindlin."""
+with standard P1 at lambda = 0, SPD, its saddle-point factorization against the condensed K, and nearly
+incompressible contact against Hertz and Cattaneo-Mindlin."""
 
 from __future__ import annotations
 
@@ -8,12 +9,15 @@ import warnings
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
+from scipy.sparse.linalg import spsolve
 from skfem import Basis, ElementTetP1, ElementTetP2, ElementVector, FacetBasis, LinearForm, MeshTet, asm
 
 from contact.scene import ContactSpec, GelSpec, Load, LoadKind, Material, MeshSettings, Scene
 from contact.solver import preparation_key, solve_scene
 from contact.theory import hertz, stick_ratio_translational
-from fem.elasticity import assemble_stiffness, lame_parameters
+from fem.elasticity import assemble_elastic_model, assemble_stiffness, lame_parameters
+from fem.linear_solver import SaddlePointFactorization, available_backends
 
 E, NU_INCOMPRESSIBLE = 1.0, 0.4999          # MPa, -
 # round-off amplified by cond(K) ~ (lambda / G) (L / h)^2 ~ 1e5 on the 4 x 4 x 4 patch at nu = 0.4999 (measured
@@ -112,6 +116,53 @@ def test_nodal_average_is_p1_only_and_named_in_errors():
         MeshSettings(volumetric="nodal_average", order=2)
 
 
+# the same round-off bound for a solve on the base-fixed, mirror-plane cube: cond(K) = 1.9e5 at nu = 0.4999, so
+# each direct solve is good to ~cond * eps = 4e-11 relative (observed 2e-12 between the two systems)
+SOLVE_TOLERANCE = 1e-10
+
+
+@pytest.fixture(scope="module")
+def incompressible_cube():
+    # base fixed and u_y = 0 on the plane y = 0: pressure nodes on fixed dofs are kept in the saddle-point system
+    return assemble_elastic_model(distorted_cube(), E, NU_INCOMPRESSIBLE, symmetry_plane_y=0.0,
+                                  volumetric="nodal_average")
+
+
+def test_saddle_point_blocks_condense_to_the_stiffness(incompressible_cube):
+    blocks = incompressible_cube.saddle_point
+    condensed = blocks.shear_stiffness + blocks.pairing.T @ sp.diags(1.0 / blocks.pressure_compliance) @ blocks.pairing
+    scale = abs(incompressible_cube.stiffness_free).max()
+    assert abs(condensed - incompressible_cube.stiffness_free).max() < 1e2 * np.finfo(float).eps * scale
+    # lambda = 0 has no pressure to keep (V_n / lambda = inf): the condensed K (= K_G) is factorized as it is
+    assert assemble_elastic_model(distorted_cube(), E, 0.0, volumetric="nodal_average").saddle_point is None
+    assert assemble_elastic_model(distorted_cube(), E, NU_INCOMPRESSIBLE).saddle_point is None
+
+
+@pytest.mark.parametrize("backend", available_backends())
+def test_saddle_point_solve_equals_condensed_solve(incompressible_cube, backend):
+    # K^-1 f is the displacement block of the saddle-point solution with zero pressure rows (linear_solver):
+    # one column, a block of columns and a block split into chunks of 2 give the condensed K's solution
+    blocks = incompressible_cube.saddle_point
+    stiffness = incompressible_cube.stiffness_free.tocsc()
+    rhs = np.random.default_rng(2).standard_normal((stiffness.shape[0], 5))
+    expected = spsolve(stiffness, rhs)
+    factorization = SaddlePointFactorization(blocks.shear_stiffness, blocks.pairing, blocks.pressure_compliance,
+                                             backend, chunk=2)
+    assert factorization.backend == backend and factorization.factor_nonzeros > 0
+    single = factorization.solve(rhs[:, 0])
+    assert single.shape == (stiffness.shape[0],)
+    assert np.linalg.norm(single - expected[:, 0]) < SOLVE_TOLERANCE * np.linalg.norm(expected[:, 0])
+    block = factorization.solve(rhs)
+    assert block.shape == rhs.shape
+    assert np.linalg.norm(block - expected) < SOLVE_TOLERANCE * np.linalg.norm(expected)
+
+
+def test_saddle_point_needs_a_positive_pressure_compliance(incompressible_cube):
+    blocks = incompressible_cube.saddle_point
+    with pytest.raises(ValueError, match=r"compliance must be finite and > 0"):
+        SaddlePointFactorization(blocks.shear_stiffness, blocks.pairing, 0.0 * blocks.pressure_compliance)
+
+
 # nearly incompressible contact: the stability study's block (20 x 20 x 10 mm), sphere R = 10 mm, P = 0.2 N,
 # friction switched on after the press (no Spence pre-slip; beta ~ 0.001 at nu = 0.499, THEORY.md sec. 5)
 RADIUS, FORCE, MU, NU_CONTACT = 10.0, 0.2, 0.5, 0.499
@@ -142,6 +193,8 @@ def stick_ratio_errors(result) -> np.ndarray:
 def test_nodal_average_contact_follows_hertz_and_cattaneo_mindlin(incompressible_results):
     result = incompressible_results["nodal_average"]
     assert result.mesh_info["volumetric"] == "nodal_average"            # reported in result.json's "mesh"
+    assert result.mesh_info["factorized_system"] == "saddle_point"
+    assert incompressible_results["standard"].mesh_info["factorized_system"] == "stiffness"
     a_hertz = float(hertz(FORCE, RADIUS, E / (1 - NU_CONTACT**2)).contact_radius)
     # the same tolerances as the nu = 0.3 tests (tests/test_contact_solver.py): a to +-h/2, c/a to +-h/(2a)
     assert result.increments[0].contact_radius == pytest.approx(a_hertz, abs=H / 2)

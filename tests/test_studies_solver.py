@@ -121,6 +121,22 @@ def test_benchmark_quick_writes_medians(tmp_path):
                                                                rel=1e-9)
 
 
+def test_benchmark_factorizations_quick_agree(tmp_path):
+    from studies import benchmark
+
+    summary = benchmark.run(tmp_path, quick=True, factorizations=True)
+    stored = json.loads((tmp_path / "benchmark_factorizations.json").read_text())
+    assert stored["nodal-average saddle point"]["factor_nonzeros"] == summary["nodal-average saddle point"][
+        "factor_nonzeros"]
+    # the saddle-point and the condensed factorization solve the same K: cond(K) = 7e6 on this mesh at nu = 0.4999,
+    # so two backward-stable solves differ by ~cond * eps = 2e-9 of the largest entry at most (observed 4e-13)
+    assert summary["saddle_point_vs_condensed_max_difference"] < 1e-8
+    saddle, condensed = summary["nodal-average saddle point"], summary["nodal-average condensed K"]
+    # nonzeros are deterministic, unlike times: the saddle point avoids the second-neighbour coupling of B^T B
+    assert saddle["matrix_nonzeros"] < condensed["matrix_nonzeros"]
+    assert saddle["free_dofs"] == condensed["free_dofs"] == summary["P1 standard"]["free_dofs"]
+
+
 def test_every_study_module_imports():
     import warnings
 
