@@ -19,6 +19,16 @@ defaults (each field says which formula):
                       FEM bench (fig9: CoP moves 7.7 times the plate shift at 2 N; isolated column: 25) must decide
                       between g_cop and h - both are calibration parameters.
     damping           viscous time constant of the gel tau_d [s]: F += tau_d k_tangent rate (both directions)
+
+FEM-calibrated values: ``ReducedFingertip.calibrated()`` (or ``load_calibrated()``) reads
+``contact/reduced/data/fingertip_3x3_calibrated.json``, written by ``python -m studies reduced-calibration
+--write-package-data`` (``contact.reduced.calibration``) from the FEM bench of figs. 6/9 (this default design, mu = 1,
+rigid plate, h = 0.3 mm): a press at 1.5-5 N, plate shifts at 2 and 5 N and a plate twist at 2 N; the file keeps the
+mesh, load paths, fit residuals and the error on held-out FEM paths. Against the closed forms above the FEM gives
+k_n +14 % (the plate approach grows like P^0.64, no base settlement), c_a +1.5 %, G* -44 % (bump bending and base
+shear), G_t -22 %, s = 7.9 mm (the base pressure is wider than half a pitch), and for the CoP g ~ 0, h = 5.2 mm: the
+base CoP follows the overturning moment h Q_i / P_i, not the displacement (told apart by the two normal forces; at one
+force the two terms are collinear). The closed loop (studies._grasp_world) still uses the closed forms.
 """
 
 from __future__ import annotations

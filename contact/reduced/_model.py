@@ -121,6 +121,17 @@ class ReducedFingertip:
     def from_dict(cls, data: dict) -> "ReducedFingertip":
         return cls(ArrayFingertipDesign.from_dict(data["design"]), ReducedParameters.from_dict(data["parameters"]))
 
+    @classmethod
+    def calibrated(cls, path=None, design: ArrayFingertipDesign | None = None) -> "ReducedFingertip":
+        """FEM-calibrated model from a calibration file (default: the packaged 3x3 fingertip; ``_store``).
+
+        With ``design`` given, the file's design must equal it (ValueError naming the fields that differ).
+        """
+        from ._store import load_calibration
+
+        stored = load_calibration(path, design)
+        return cls(stored.design, stored.parameters)
+
     # --- states -------------------------------------------------------------------------------------------
     def bump_shear(self, translation, rotation) -> np.ndarray:
         """Bump shear displacements delta_i = t + theta z x r_i (..., k, 2) [mm] of a rigid object motion."""
