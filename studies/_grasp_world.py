@@ -24,6 +24,7 @@ Object-table contact stays MuJoCo's (elliptic cone): it only decides when the ob
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from dataclasses import dataclass, field, replace
@@ -52,7 +53,21 @@ GRID_SPACING = 1.0                  # mm, base-pressure grid (kernel radius >= 4
 TORQUE_LIMIT = 1500.0               # N mm, finger actuator (30 N per finger at the 50 mm arm radius)
 ARM_RADIUS = AccelerationControlParameters().arm_radius      # mm per rad of the finger drive
 TABLE_CLEARANCE_M = 0.001           # object lower than this above the table during the hold = touches the ground
-ROTATION_LIMIT = 0.05               # rad (3 deg): an object turned further in the grasp has rotated out of it
+# rad (8.6 deg): an object turned further in the grasp has rotated out of it. With rotational detection the
+# moment-loaded objects turn 30-105 mrad while the weight comes off the table in the lift (the grip builds from
+# F_min at the loop's rate) and then hold still; the eclair without it turns 180-190 mrad (fig10).
+ROTATION_LIMIT = 0.15
+# Grasp-force loop rate [rad/s]. The FEM-calibrated fingertip's sensor reads the load ratio (CoP shift = moment arm
+# x Q_i / P_i, contact.reduced calibration), not the slip-amplified shear displacement the default 30 rad/s was
+# designed on: at 30 rad/s the bottle's grip oscillated between 7 and 29 N at ~2.5 Hz and it turned 115 mrad;
+# at 10 rad/s the hold force ripples by 0.09 N (5 rad/s: 0.7 N, slower to follow the lift).
+LOOP_RATE = 10.0
+
+
+@functools.lru_cache(maxsize=1)
+def default_tip() -> ReducedFingertip:
+    """Both fingertips of the closed loop: the FEM-calibrated 3x3 design shipped with contact.reduced."""
+    return ReducedFingertip.calibrated()
 
 
 @dataclass(frozen=True)
@@ -455,7 +470,7 @@ class GraspWorld:
     ----------
     obj : GraspObject
     settings : TrialSettings
-    tip : ReducedFingertip -- both fingertips (default: closed-form parameters of the default design).
+    tip : ReducedFingertip -- both fingertips (default: the FEM-calibrated 3x3 design, ``default_tip``).
     grasp_parameters : GraspForceParameters -- the controller (rotational detection is taken from ``settings``).
     """
 
@@ -465,14 +480,14 @@ class GraspWorld:
 
         self.mujoco = mujoco
         self.obj, self.settings = obj, settings
-        self.tip = ReducedFingertip() if tip is None else tip
+        self.tip = default_tip() if tip is None else tip
         self.model = mujoco.MjModel.from_xml_string(_mjcf(obj, settings, self.tip))
         self.data = mujoco.MjData(self.model)
         mujoco.mj_forward(self.model, self.data)
         self.rng = np.random.default_rng(settings.seed)
         self.bridge = _ContactBridge(self.model, self.data, self.tip, obj, settings.friction)
         self.sensing = SensingChain(self.tip, settings.sensor_noise, self.rng, settings.targets)
-        base = GraspForceParameters(approach_force=0.5, maximum_force=TORQUE_LIMIT / ARM_RADIUS) \
+        base = GraspForceParameters(approach_force=0.5, maximum_force=TORQUE_LIMIT / ARM_RADIUS, loop_rate=LOOP_RATE) \
             if grasp_parameters is None else grasp_parameters
         self.grasp = GraspForceController(replace(base, rotational_slip_detection=settings.rotational_slip_detection),
                                           self.sensing.design_references())
@@ -603,7 +618,7 @@ class GraspWorld:
 def required_grip_force(obj: GraspObject, friction: float, tip: ReducedFingertip = None) -> float:
     """Least normal force per finger [N] that carries the object (reduced model's slip limit, two fingers sharing
     the weight m g / 2 [N] and the moment m g lever / 2 [N mm] about the fingertip normal)."""
-    tip = ReducedFingertip() if tip is None else tip
+    tip = default_tip() if tip is None else tip
     weight_n = obj.mass * GRAVITY
     return tip.minimum_normal_force((0.0, 0.5 * weight_n), 0.5 * weight_n * obj.lever * MM_PER_M, friction)
 

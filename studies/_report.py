@@ -280,7 +280,7 @@ CLAIMS: dict[str, Claim] = {
         "the grasp force rises and falls at the moments of lifting and placing, following u_x and u_theta; without "
         "rotational slip detection the grasp force is not enough (eclair)",
         "MuJoCo closed loop with the reduced contact model: bottle held, eclair held with rotational slip detection "
-        "(turned less than 3 deg) and lost, crushed or turned out of the grasp without it (targets at 0.8 of the "
+        "(turned less than 8.6 deg) and lost, crushed or turned out of the grasp without it (targets at 0.8 of the "
         "slip limit)", _rule_fig10,
         "With Table I's lowest-mu targets (0.6) the translational channel alone also holds the eclair: its estimate "
         "grows with the array's partial rotational slip (fig10_summary.csv)."),

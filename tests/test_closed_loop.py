@@ -46,8 +46,8 @@ def test_light_object_is_lifted_and_held_without_creep():
 
 
 def test_moment_turns_the_object_out_of_the_grasp_without_rotational_detection():
-    # the horizontal bottle (120 mN m) at mu = 0.4 needs 10.8 N per finger; the translational channel alone
-    # settles far below it (paper Fig. 10b)
+    # the horizontal bottle (120 mN m) at mu = 0.4 needs 10.8 N per finger (FEM-calibrated fingertip); the
+    # translational channel alone settles far below it (paper Fig. 10b)
     from studies._grasp_world import TABLE_I_OBJECTS, TrialSettings, required_grip_force, run_trial
 
     bottle = TABLE_I_OBJECTS["bottle_horizontal"]
@@ -56,5 +56,6 @@ def test_moment_turns_the_object_out_of_the_grasp_without_rotational_detection()
     rotation = lambda result: max(abs(r) for r in result.trace["rotation"])          # [rad]
     assert rotation(without) > 0.1 and not without.success                  # rotated out, its end on the table
     assert without.rotated and without.max_rotation_mrad > 100.0
-    assert with_detection.success and rotation(with_detection) < 0.05 and not with_detection.rotated
+    # with detection it turns while the weight comes off the table (the grip builds from F_min), then holds
+    assert with_detection.success and not with_detection.rotated and with_detection.hold_rotation_mrad < 5.0
     assert with_detection.hold_force_mean > required_grip_force(bottle, 0.4) > without.hold_force_mean
