@@ -329,9 +329,10 @@ class SensingChain:
     The bench (noise-free, like the FEM bench of Fig. 9) calibrates the CoP gain on small shifts and sets the
     controller's targets: u_x,ref is what the chain reports when every bump carries Q_i / (mu_low P_i) =
     ``design.load_ratio``, theta_ref when the array carries ``design.torque_ratio`` of its slip torque, at the
-    reference force, for the lowest friction expected (``design.friction``). Whether the targets scale with the force (``ReferenceParameters``) is
-    read off the bench too: a signal that follows the shear displacement grows like F^(2/3) at a fixed load ratio
-    (scaled targets), one dominated by the overturning moment h Q / P stays constant (fixed targets). The
+    reference force, for the lowest friction expected (``design.friction``). How each target scales with the force
+    (``ReferenceParameters`` force exponents) is read off the bench too: a signal that follows the shear displacement
+    grows like F^(2/3) at a fixed load ratio, one dominated by the overturning moment h Q / P stays constant
+    (exponent 0, a fixed target; negative growths are clipped to 0). The
     controller's inversion exponents (its loop gain) are matched to the chain's measured slopes through the slip
     factors.
     """
@@ -390,10 +391,11 @@ class SensingChain:
         u_ref = self._design_signal(force, x, 0.0)[0]
         theta_ref = self._design_signal(force, 0.0, y)[1]
         # how the signals grow with the force at the design ratios (a hemisphere: u ~ F^(2/3), theta ~ F^(1/3); the
-        # array's twist signal ~ F^(2/3) too, its bumps translate), each channel scaled with its own exponent
+        # array's twist signal ~ F^(2/3) too, its bumps translate; a load-ratio signal, as the FEM-calibrated CoP,
+        # does not grow: exponent 0, a fixed target), each channel scaled with its own exponent
         growth = (math.log(self._design_signal(4.0 * force, x, 0.0)[0] / u_ref) / math.log(4.0),
                   math.log(self._design_signal(4.0 * force, 0.0, y)[1] / theta_ref) / math.log(4.0))
-        references = ReferenceParameters(u_ref, theta_ref, force, scale_with_force=growth[0] > 1.0 / 3.0,
+        references = ReferenceParameters(u_ref, theta_ref, force, scale_with_force=True,
                                          translational_force_exponent=min(max(growth[0], 0.0), 2.0),
                                          rotational_force_exponent=min(max(growth[1], 0.0), 2.0))
         # |u| / u_ref(F) ~ F^(-e) at a constant load: e from a +-1 % force change at the design load

@@ -137,7 +137,7 @@ def selected_names(modules: dict, import_errors: dict, only=None) -> list[str]:
 def source_files(module) -> list[Path]:
     """What a study's results depend on: its module and every module of ``studies._*`` and SOURCE_PACKAGES that it
     imports, directly or through others (static imports, also inside functions; with the packages' ``__init__``),
-    and the scene files. A change elsewhere (another study, a module it never imports) keeps it up to date."""
+    the scene files and the JSON data next to those modules. A change elsewhere (another study, a module it never imports) keeps it up to date."""
     files, seen = set(), set()
     pending = [module.__name__]
     while pending:
@@ -160,6 +160,8 @@ def source_files(module) -> list[Path]:
                 if _tracked(base):             # the module, and each imported name that is itself a module
                     pending += [base] + [f"{base}.{alias.name}" for alias in node.names]
     files.update((Path(module.__file__).parent / "scenes").glob("*.toml"))
+    for path in list(files):                   # package data a tracked module reads (the calibrated fingertip)
+        files.update((path.parent / "data").glob("*.json"))
     return sorted(files)
 
 

@@ -144,6 +144,14 @@ def test_file_round_trip(tmp_path):
     assert load_calibrated(path).parameters == stored().parameters
 
 
+def test_non_finite_number_is_named_and_nothing_is_written(tmp_path):
+    bad = stored()
+    bad.provenance["diagnostics"] = {"settlement": [0.1, float("nan")]}
+    with pytest.raises(ValueError, match=r"non-finite number at provenance\.diagnostics\.settlement\.1"):
+        save_calibration(tmp_path / "calibration.json", bad)
+    assert not list(tmp_path.iterdir())
+
+
 def _write(tmp_path, data):
     path = tmp_path / "bad.json"
     path.write_text(json.dumps(data))

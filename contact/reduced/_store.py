@@ -95,11 +95,30 @@ def parse_calibration(data: dict, where: str = "calibration") -> StoredCalibrati
     return StoredCalibration(design, parameters, data["provenance"])
 
 
+def _non_finite_key(value, key: str = "") -> str:
+    """Dotted key of the first NaN or inf in a JSON-like tree ("" if none)."""
+    if isinstance(value, dict):
+        items = value.items()
+    elif isinstance(value, (list, tuple)):
+        items = ((str(i), item) for i, item in enumerate(value))
+    else:
+        return key if isinstance(value, float) and not math.isfinite(value) else ""
+    for name, item in items:
+        found = _non_finite_key(item, f"{key}.{name}" if key else str(name))
+        if found:
+            return found
+    return ""
+
+
 def save_calibration(path, calibration: StoredCalibration) -> Path:
     """Write ``calibration`` as indented JSON to ``path`` atomically (temporary file and rename); return the path."""
     data = calibration.to_dict()
-    parse_calibration(json.loads(json.dumps(data)), str(path))          # what is written must read back
-    text = json.dumps(data, indent=1, allow_nan=False) + "\n"
+    try:
+        text = json.dumps(data, indent=1, allow_nan=False) + "\n"
+    except ValueError as error:                # NaN or inf somewhere: name where before anything is written
+        raise ValueError(f"calibration for {path} holds a non-finite number at {_non_finite_key(data)}: {error}") \
+            from None
+    parse_calibration(json.loads(text), str(path))                      # what is written must read back
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
