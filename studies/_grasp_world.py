@@ -7,7 +7,7 @@ gets no object data (mass, moment, friction).
 
 How the contact is enforced. MuJoCo's friction is soft (a held object creeps, DESIGN.md), so the fingers and the
 object do not collide in MuJoCo (contype/conaffinity 0 on the fingers): every bump tip is a contact of the reduced
-model, evaluated at 2 kHz and applied to the object (and, reversed, to the finger) through ``xfrc_applied``:
+model, evaluated at 4 kHz (CONTACT_RATE_HZ) and applied to the object (and, reversed, to the finger) through ``xfrc_applied``:
 
 * normal: P_i = k_n d_i^(3/2) (1 + tau_d 1.5 d_i'/d_i), d_i the penetration of bump tip i into the object's face;
 * tangential: at first touch the bump is anchored to the material point of the face it touches (object frame); the
