@@ -101,9 +101,7 @@ def _gel_mesh(scene: Scene, fine_radius: float, half: bool):
 def preparation_key(scene: Scene) -> tuple:
     """Hashable key of everything ``prepare`` depends on: scenes with equal keys can share one Prepared."""
     fine_radius, half = _fine_radius_and_half(scene)
-    # scene.mesh holds mesh.volumetric too; named again so that no refactoring of MeshSettings can drop it
-    return (scene.gel, scene.material, scene.mesh, scene.mesh.volumetric, scene.body.center, round(fine_radius, 12),
-            half)
+    return (scene.gel, scene.material, scene.mesh, scene.body.center, round(fine_radius, 12), half)
 
 
 def factorize_stiffness(model: ElasticModel) -> SpdFactorization | SaddlePointFactorization:

@@ -10,10 +10,11 @@ from __future__ import annotations
 import hashlib
 import json
 import os
-import tempfile
 from pathlib import Path
 
 import numpy as np
+
+from fem.atomic import atomic_path
 
 __all__ = ["CACHE_ENV_VAR", "MeshCache", "cache_key", "default_cache_dir"]
 
@@ -63,14 +64,7 @@ class MeshCache:
 
     def save(self, key: str, nodes: np.ndarray, tets: np.ndarray, metadata: dict | None = None) -> Path:
         """Write (p, t) under ``key`` atomically; returns the file path."""
-        self.directory.mkdir(parents=True, exist_ok=True)
-        handle, temporary = tempfile.mkstemp(dir=self.directory, prefix=".mesh-", suffix=".npz.tmp")
-        try:
-            with os.fdopen(handle, "wb") as stream:
-                np.savez(stream, p=np.asarray(nodes, dtype=float), t=np.asarray(tets, dtype=np.int64),
-                         metadata=np.array(json.dumps(metadata or {}, sort_keys=True, default=repr)))
-            os.replace(temporary, self.path(key))
-        except BaseException:
-            Path(temporary).unlink(missing_ok=True)
-            raise
+        with atomic_path(self.path(key)) as temporary, open(temporary, "wb") as stream:    # a stream: np.savez
+            np.savez(stream, p=np.asarray(nodes, dtype=float), t=np.asarray(tets, dtype=np.int64),  # adds no suffix
+                     metadata=np.array(json.dumps(metadata or {}, sort_keys=True, default=repr)))
         return self.path(key)

@@ -61,27 +61,48 @@ def array_scene(size_contact: float, order: int = 1, n_shear: int = 1):
         loads=(Load(LoadKind.PRESS, "force", (tip.NORMAL_FORCE,)), Load(LoadKind.SHEAR, "force", shear_forces)))
 
 
+def solve_timed(scene):
+    """Solve ``scene``; return the result and its cost columns: DOF, elements, compliance columns, wall and mesh
+    time [s] (wall: the whole solve, mesh from the disk cache when it is there)."""
+    from contact.solver import solve_scene
+
+    start = time.perf_counter()
+    result = solve_scene(scene)
+    wall = time.perf_counter() - start
+    return result, dict(dofs=result.mesh_info["dofs"], elements=result.mesh_info["elements"],
+                        compliance_columns=result.timings["compliance_columns"], wall_time=wall,
+                        mesh_time=float(result.timings["mesh"]))
+
+
 def solve_array_case(size_contact: float, order: int = 1, n_shear: int = 1) -> dict:
     """Solve one array case; its errors against Cattaneo-Mindlin and Hertz(P/9), DOF and wall time [s]."""
-    from contact.solver import solve_scene
     from contact.theory import hertz, stick_ratio_translational
     from studies import _fingertip as tip
 
     scene = array_scene(size_contact, order, n_shear)
-    start = time.perf_counter()
-    result = solve_scene(scene)
-    wall = time.perf_counter() - start
+    result, cost = solve_timed(scene)
     bumps = 9
     radius = float(hertz(tip.NORMAL_FORCE / bumps, scene.gel.geometry.bump_radius,
                          scene.material.effective_modulus).contact_radius)
     contact_radius = float(np.sqrt(result.increments[0].contact_area / (bumps * np.pi)))
     stick_error = result.increments[-1].stick_ratio - float(stick_ratio_translational(ARRAY_LOAD_RATIO, 2))
-    return dict(dofs=result.mesh_info["dofs"], elements=result.mesh_info["elements"],
-                compliance_columns=result.timings["compliance_columns"], wall_time=wall,
-                mesh_time=float(result.timings["mesh"]),
-                stick_ratio_error=abs(stick_error), stick_ratio_error_signed=stick_error,
+    return dict(**cost, stick_ratio_error=abs(stick_error), stick_ratio_error_signed=stick_error,
                 final_stick_ratio_error=stick_error, contact_radius_error=contact_radius / radius - 1.0,
                 shift_error=float("nan"))
+
+
+def plot_errors_against_time(axis, rows: list[dict], key: str, styles: dict, increments_study: str) -> None:
+    """|rows[key]| against wall time on log axes, one line per study in ``styles`` ({study: matplotlib format}),
+    each point tagged with its element size (or its number of increments for ``increments_study``)."""
+    for study, style in styles.items():
+        subset = [r for r in rows if r["study"] == study]
+        if not subset:
+            continue
+        values = [abs(r[key]) for r in subset]
+        axis.loglog([r["wall_time"] for r in subset], values, style, label=study)
+        for r, v in zip(subset, values):
+            tag = f"n={r['n_shear']}" if study == increments_study else f"h={r['size_contact']}"
+            axis.annotate(tag, (r["wall_time"], v), textcoords="offset points", xytext=(4, 3), fontsize=7)
 
 
 def plot_array(axes, rows: list[dict], knee: dict | None, knee_factor: float) -> None:
@@ -91,15 +112,7 @@ def plot_array(axes, rows: list[dict], knee: dict | None, knee_factor: float) ->
     metrics = (("stick_ratio_error", f"|c/a - Cattaneo-Mindlin| at Q/(mu P) = {ARRAY_LOAD_RATIO}"),
                ("contact_radius_error", "|bump a / a_Hertz(P/9) - 1|"))
     for axis, (key, label) in zip(axes, metrics):
-        for study, style in styles.items():
-            subset = [r for r in rows if r["study"] == study]
-            if not subset:
-                continue
-            values = [abs(r[key]) for r in subset]
-            axis.loglog([r["wall_time"] for r in subset], values, style, label=study)
-            for r, v in zip(subset, values):
-                tag = f"n={r['n_shear']}" if study == ARRAY_STUDIES[2] else f"h={r['size_contact']}"
-                axis.annotate(tag, (r["wall_time"], v), textcoords="offset points", xytext=(4, 3), fontsize=7)
+        plot_errors_against_time(axis, rows, key, styles, ARRAY_STUDIES[2])
         if key == "stick_ratio_error" and knee:
             axis.plot(knee["wall_time"], knee["stick_ratio_error"], "r*", ms=16,
                       label=f"knee: cheapest P1 within {knee_factor:.2f}x best")

@@ -5,26 +5,10 @@ from __future__ import annotations
 import csv
 import json
 import math
-import os
-import tempfile
 from pathlib import Path
 from typing import Iterable, Mapping
 
-
-def _atomic_write_text(path: Path, text: str) -> Path:
-    """Write text to ``path`` through a temporary file and a rename, so a crash never leaves half a file."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    handle, tmp_name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(handle, "w", newline="") as stream:
-            stream.write(text)
-        os.chmod(tmp_name, 0o644)                  # mkstemp makes 0600; results are meant to be shared
-        os.replace(tmp_name, path)
-    except BaseException:
-        Path(tmp_name).unlink(missing_ok=True)
-        raise
-    return path
+from fem.atomic import atomic_path, write_text_atomic
 
 
 def write_csv_atomic(path: Path, rows: Iterable[Mapping[str, object]]) -> Path:
@@ -39,7 +23,7 @@ def write_csv_atomic(path: Path, rows: Iterable[Mapping[str, object]]) -> Path:
     writer = csv.DictWriter(buffer, fieldnames=columns, lineterminator="\n")
     writer.writeheader()
     writer.writerows(rows)
-    return _atomic_write_text(path, buffer.getvalue())
+    return write_text_atomic(path, buffer.getvalue())
 
 
 def _json_default(value):
@@ -57,22 +41,18 @@ def _json_default(value):
 def write_json_atomic(path: Path, data: object) -> Path:
     """Write ``data`` as indented JSON (numpy arrays become lists; NaN is refused)."""
     text = json.dumps(data, indent=1, default=_json_default, allow_nan=False)
-    return _atomic_write_text(path, text + "\n")
+    return write_text_atomic(path, text + "\n")
 
 
 def save_figure(fig, out_dir: Path, name: str) -> list[Path]:
     """Save a matplotlib figure as ``out_dir/name.png`` (150 dpi) and ``.pdf``; close it; return the paths."""
     import matplotlib.pyplot as plt
 
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
     paths = []
     for ext in ("png", "pdf"):
-        target = out_dir / f"{name}.{ext}"
-        tmp = out_dir / f".{name}.tmp.{ext}"
-        fig.savefig(tmp, dpi=150, bbox_inches="tight")
-        os.replace(tmp, target)
-        paths.append(target)
+        with atomic_path(Path(out_dir) / f"{name}.{ext}") as temporary:
+            fig.savefig(temporary, dpi=150, bbox_inches="tight", format=ext)
+        paths.append(Path(out_dir) / f"{name}.{ext}")
     plt.close(fig)
     return paths
 

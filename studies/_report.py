@@ -389,12 +389,12 @@ def _run_text(run_info: dict, entries: list[dict]) -> str:
 
 def write_report(out_dir, records: list[dict], run_info: dict) -> dict:
     """Write ``index.html`` and ``REPORT.md`` into ``out_dir``; return their paths."""
-    from studies._output import _atomic_write_text
+    from fem.atomic import write_text_atomic
 
     out_dir = Path(out_dir)
     entries = _entries(records, out_dir)
-    html_path = _atomic_write_text(out_dir / "index.html", _html(entries, run_info))
-    md_path = _atomic_write_text(out_dir / "REPORT.md", _markdown(entries, run_info))
+    html_path = write_text_atomic(out_dir / "index.html", _html(entries, run_info))
+    md_path = write_text_atomic(out_dir / "REPORT.md", _markdown(entries, run_info))
     return {"html": html_path, "markdown": md_path}
 
 

@@ -8,12 +8,11 @@ Hertz, tangential shift against Mindlin; wall time is the whole solve (mesh, ass
 from __future__ import annotations
 
 import dataclasses
-import time
 from pathlib import Path
 
 import numpy as np
 
-from studies._convergence_array import ARRAY_STUDIES, array_cases, solve_array_case
+from studies._convergence_array import ARRAY_STUDIES, array_cases, solve_array_case, solve_timed
 from studies._output import save_figure, write_csv_atomic
 
 NAME = "convergence"
@@ -37,7 +36,6 @@ def _cases(quick: bool) -> list[dict]:
 def solve_case(size_contact: float, order: int, n_shear: int) -> dict:
     """Solve HCM-1 with the given mesh and number of equal shear increments to Q/(mu P) = 0.9; errors and time."""
     from contact.scene import load_scene
-    from contact.solver import solve_scene
     from contact.theory import hertz, mindlin_shift, stick_ratio_translational
 
     scene = load_scene(SCENE)
@@ -48,9 +46,7 @@ def solve_case(size_contact: float, order: int, n_shear: int) -> dict:
     scene = dataclasses.replace(
         scene, mesh=dataclasses.replace(scene.mesh, size_contact=size_contact, order=order),
         loads=(press, dataclasses.replace(shear, values=tuple(float(r * mu * force) for r in ratios))))
-    start = time.perf_counter()
-    result = solve_scene(scene)
-    wall = time.perf_counter() - start
+    result, cost = solve_timed(scene)
     material = scene.material
     reference = hertz(force, scene.body.radius, material.effective_modulus)
     shear_increments = result.increments[1:]
@@ -58,9 +54,7 @@ def solve_case(size_contact: float, order: int, n_shear: int) -> dict:
     shift_error = [inc.shift[0] / float(mindlin_shift(r * mu * force, force, mu, inc.contact_radius,
                                                       material.shear_modulus, material.nu)) - 1.0
                    for r, inc in zip(ratios, shear_increments)]
-    return dict(dofs=result.mesh_info["dofs"], elements=result.mesh_info["elements"],
-                compliance_columns=result.timings["compliance_columns"], wall_time=wall,
-                mesh_time=float(result.timings["mesh"]), stick_ratio_error=float(np.max(np.abs(stick_error))),
+    return dict(**cost, stick_ratio_error=float(np.max(np.abs(stick_error))),
                 stick_ratio_error_signed=float(stick_error[int(np.argmax(np.abs(stick_error)))]),
                 final_stick_ratio_error=float(stick_error[-1]),
                 contact_radius_error=float(result.increments[0].contact_radius / float(reference.contact_radius) - 1),
@@ -116,7 +110,7 @@ def _plot(rows: list[dict], hcm1_knee: dict | None, array_knee: dict | None = No
     import matplotlib.pyplot as plt
     from matplotlib.ticker import NullFormatter
 
-    from studies._convergence_array import plot_array
+    from studies._convergence_array import plot_array, plot_errors_against_time
 
     with_array = any(r["study"] in ARRAY_STUDIES for r in rows)
     fig, grid = plt.subplots(2 if with_array else 1, 3, figsize=(15, 9.2 if with_array else 4.6), squeeze=False)
@@ -125,15 +119,7 @@ def _plot(rows: list[dict], hcm1_knee: dict | None, array_knee: dict | None = No
                ("shift_error", "max |shift / Mindlin - 1|"))
     markers = {"element size (P1)": "o-", "element order (P2)": "s-", "shear increments": "^--"}
     for axis, (key, label) in zip(axes, metrics):
-        for study, style in markers.items():
-            subset = [r for r in rows if r["study"] == study]
-            if not subset:
-                continue
-            values = [abs(r[key]) for r in subset]
-            axis.loglog([r["wall_time"] for r in subset], values, style, label=study)
-            for r, v in zip(subset, values):
-                tag = f"h={r['size_contact']}" if study != "shear increments" else f"n={r['n_shear']}"
-                axis.annotate(tag, (r["wall_time"], v), textcoords="offset points", xytext=(4, 3), fontsize=7)
+        plot_errors_against_time(axis, rows, key, markers, "shear increments")
         if key == "stick_ratio_error":
             axis.axhline(TARGET_STICK_RATIO_ERROR, color="grey", ls=":", label=f"target {TARGET_STICK_RATIO_ERROR}")
             if hcm1_knee:

@@ -87,6 +87,12 @@ class BaseGrid:
     def spacing(self) -> float:
         return float(self.x[1] - self.x[0])
 
+    @property
+    def points(self) -> np.ndarray:
+        """Grid points (ny nx, 2) [mm], row-major like a (ny, nx) pressure image raveled."""
+        grid_x, grid_y = np.meshgrid(self.x, self.y)
+        return np.column_stack([grid_x.ravel(), grid_y.ravel()])
+
 
 def _fibonacci_sphere(count: int) -> np.ndarray:
     index = np.arange(count) + 0.5

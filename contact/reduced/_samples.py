@@ -118,12 +118,13 @@ class PathSamples:
         count = len(centres)
         points = result.candidate_positions[:, :2]                                   # (n, 2)
         areas = result.candidate_areas                                               # (n,)
-        owner = np.eye(count)[nearest_bump(points, centres)]                         # (n, k)
+        nearest = nearest_bump(points, centres)
+        owner = np.eye(count)[nearest]                                               # (n, k)
         increments = result.increments
         status = np.stack([inc.status for inc in increments])                        # (t, n)
         normal = np.stack([inc.pressure for inc in increments]) * areas              # (t, n) [N]
         tangential = np.stack([inc.traction for inc in increments]) * areas[:, None]  # (t, n, 2) [N]
-        arm = points - centres[nearest_bump(points, centres)]                        # (n, 2) from own centre
+        arm = points - centres[nearest]                                              # (n, 2) from own centre
         spin = arm[:, 0] * tangential[..., 1] - arm[:, 1] * tangential[..., 0]        # (t, n) [N mm]
         contact_area = ((status != OPEN) * areas) @ owner                            # (t, k)
         stick_area = ((status == STICK) * areas) @ owner
@@ -177,10 +178,8 @@ class PathSamples:
             else:
                 states.append(tip.load_state(force, (first, second), third, friction))
         grid = tip.base_grid(grid_spacing)
-        grid_x, grid_y = np.meshgrid(grid.x, grid.y)
-        xy = np.column_stack([grid_x.ravel(), grid_y.ravel()])
         nodal = np.stack([tip.state_pressure(grid, state).ravel() for state in states]) * grid.spacing**2
-        base_force, base_centre, base_second = cell_moments(xy, nodal, tip.centres)
+        base_force, base_centre, base_second = cell_moments(grid.points, nodal, tip.centres)
         radius = np.stack([state.contact_radius for state in states])                     # (t, k)
         stick = np.stack([np.minimum(state.stick_ratio_translational, state.stick_ratio_rotational)
                           for state in states])

@@ -15,10 +15,10 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import tempfile
 from dataclasses import dataclass, fields
 from pathlib import Path
+
+from fem.atomic import write_text_atomic
 
 from ._design import ArrayFingertipDesign, ReducedParameters
 
@@ -119,18 +119,7 @@ def save_calibration(path, calibration: StoredCalibration) -> Path:
         raise ValueError(f"calibration for {path} holds a non-finite number at {_non_finite_key(data)}: {error}") \
             from None
     parse_calibration(json.loads(text), str(path))                      # what is written must read back
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    try:
-        with os.fdopen(handle, "w") as stream:
-            stream.write(text)
-        os.chmod(temporary, 0o644)
-        os.replace(temporary, path)
-    except BaseException:
-        Path(temporary).unlink(missing_ok=True)
-        raise
-    return path
+    return write_text_atomic(path, text)
 
 
 def load_calibration(path=None, design: ArrayFingertipDesign | None = None) -> StoredCalibration:

@@ -244,12 +244,10 @@ def kernel_grid(design: ArrayFingertipDesign, spacing: float = KERNEL_GRID_SPACI
 
 def _model_cells(tip, grid, bump_force, displacement, tangential_force):
     """Cell force (m, k), CoP (m, k, 2), second moment (m, k) of the model's base pressure for m bump states."""
-    grid_x, grid_y = np.meshgrid(grid.x, grid.y)
-    xy = np.column_stack([grid_x.ravel(), grid_y.ravel()])
     radius = tip.parameters.radius_coefficient * np.cbrt(np.maximum(bump_force, 0.0))
     nodal = np.stack([tip.base_pressure(grid, force, a, delta, q).ravel() for force, a, delta, q
                       in zip(bump_force, radius, displacement, tangential_force)]) * grid.spacing**2
-    return cell_moments(xy, nodal, tip.centres)
+    return cell_moments(grid.points, nodal, tip.centres)
 
 
 def fit_kernel_spread(press: Sequence[PathSamples], design: ArrayFingertipDesign, parameters: ReducedParameters):
