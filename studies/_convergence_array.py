@@ -47,7 +47,7 @@ def array_scene(size_contact: float, order: int = 1, n_shear: int = 1):
     """The bench's 3x3 fingertip: press NORMAL_FORCE (frictionless), then ``n_shear`` equal shear-force increments
     to Q = ARRAY_LOAD_RATIO mu P. P2: ``size_contact`` is the node spacing, and the sensor plane keeps P1's."""
     from contact.scene import ContactSpec, Load, LoadKind, MeshSettings
-    from studies import _fingertip as tip
+    from controller import bench as tip
 
     if not (isinstance(n_shear, int) and n_shear >= 1):
         raise ValueError(f"n_shear={n_shear!r} must be an integer >= 1")
@@ -77,7 +77,7 @@ def solve_timed(scene):
 def solve_array_case(size_contact: float, order: int = 1, n_shear: int = 1) -> dict:
     """Solve one array case; its errors against Cattaneo-Mindlin and Hertz(P/9), DOF and wall time [s]."""
     from contact.theory import hertz, stick_ratio_translational
-    from studies import _fingertip as tip
+    from controller import bench as tip
 
     scene = array_scene(size_contact, order, n_shear)
     result, cost = solve_timed(scene)

@@ -185,7 +185,7 @@ def _rule_fig9(summary, rows):
 
 def _rule_fig10(summary, rows):
     """Bottle and eclair held with rotational detection; the eclair lost, crushed or turned out without it."""
-    from studies._grasp_world import ROTATION_LIMIT
+    from controller.closed_loop import ROTATION_LIMIT
 
     success, turned = summary.get("success") or {}, summary.get("max_rotation_mrad") or {}
     cases = ("bottle", "eclair_with_rotation", "eclair_without_rotation")

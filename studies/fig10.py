@@ -3,7 +3,7 @@
 (a) The horizontal plastic bottle (251 g, 120 mN m) at mu = 0.6 with the Table I controller: the grasp force follows
 the estimated translational and rotational shear displacement through grasp, lift, hold, place and release.
 (b) The eclair (104 g, 39 mN m) at mu = 0.4 with and without rotational slip detection, for two target designs
-(studies._grasp_world.TargetDesign): "this surface" (targets at 0.8 of the slip limit for mu = 0.4, the tuned
+(controller.closed_loop.TargetDesign): "this surface" (targets at 0.8 of the slip limit for mu = 0.4, the tuned
 controller of the paper's experiments) and "lowest mu" (Table I's safety factor, 0.6). Without rotational
 detection the force settles where the translational channel wants it, below what the moment needs (paper: "the grasp
 force is not enough"): the eclair turns in the grasp until its rotation drives the translational estimate up. With
@@ -29,7 +29,7 @@ RECORD_EVERY = 10               # trace rows are 100 Hz; the paper records at 10
 
 def _cases():
     """{case: (object, rotational detection, friction, TargetDesign)}."""
-    from studies._grasp_world import TargetDesign
+    from controller.closed_loop import TargetDesign
 
     tuned, default = TargetDesign(ECLAIR_FRICTION, 0.8, 0.8), TargetDesign()
     return {"bottle": ("bottle_horizontal", True, FRICTION, default),
@@ -41,7 +41,7 @@ def _cases():
 
 def run(out_dir, quick: bool = False) -> dict:
     """Five trials (bottle; eclair with and without rotational detection, two target designs); CSV and figure."""
-    from studies._grasp_world import TABLE_I_OBJECTS, TrialSettings, required_grip_force, run_trial
+    from controller.closed_loop import TABLE_I_OBJECTS, TrialSettings, required_grip_force, run_trial
 
     out_dir = Path(out_dir)
     hold = 2.0 if quick else 4.0

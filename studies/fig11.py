@@ -6,7 +6,7 @@ are tried (grasp, lift, hold) and the least successful one is kept - here by bis
 reduced model's slip limit. The controller's hold force (range and mean over trials with different sensor noise and
 grasp jitter) is compared with tau_min; the ratio tau / tau_min says how much more force the controller spends.
 
-Two target designs are compared (studies._grasp_world.TargetDesign). "lowest mu": the Table I controller, whose
+Two target designs are compared (controller.closed_loop.TargetDesign). "lowest mu": the Table I controller, whose
 targets put the contact at Q / (mu_low P) = 0.6 for mu_low = 0.4, the lowest friction it may meet; below gross slip
 the shear displacement hardly depends on mu, so at mu = 0.6 it holds about mu / (mu_low x) = 2.5 times tau_min -
 its safety factor against an unknown surface. "this surface": targets at 0.8 of the slip limit for the box's own
@@ -43,7 +43,7 @@ def tau_min(obj, steps: int, rng, settings_base) -> tuple[float, int]:
     """Least successful constant grip force per finger [N] by bisection; returns (force, trials run)."""
     from dataclasses import replace
 
-    from studies._grasp_world import required_grip_force, run_trial
+    from controller.closed_loop import required_grip_force, run_trial
 
     def succeeds(force):
         settings = replace(settings_base, constant_force=float(force), hold_time=CONSTANT_FORCE_HOLD, place=False,
@@ -67,7 +67,7 @@ def tau_min(obj, steps: int, rng, settings_base) -> tuple[float, int]:
 
 def _designs():
     """{label: TargetDesign} of the module docstring."""
-    from studies._grasp_world import TargetDesign
+    from controller.closed_loop import TargetDesign
 
     return {"lowest mu": TargetDesign(), "this surface": TargetDesign(FRICTION, 0.8, 0.8)}
 
@@ -79,7 +79,7 @@ def predicted_ratio(design) -> float:
 
 def run(out_dir, quick: bool = False, trials: int | None = None) -> dict:
     """Controller trials per case and design, constant-force bisection per case; CSV and figure."""
-    from studies._grasp_world import GraspObject, TrialSettings, random_settings, required_grip_force, run_trial
+    from controller.closed_loop import GraspObject, TrialSettings, random_settings, required_grip_force, run_trial
 
     out_dir = Path(out_dir)
     trials = (1 if quick else 3) if trials is None else int(trials)

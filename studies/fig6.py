@@ -23,7 +23,7 @@ CALIBRATION_SHIFTS = (0.1, 0.2)        # mm, used to fit the gain; the others ar
 def evaluate(result, n: int, pitch: float, shifts) -> dict:
     """Calibrate the CoP gain on CALIBRATION_SHIFTS and return the error on the other shifts."""
     from controller.calibration import calibrate_gain
-    from studies._fingertip import bump_layout, sensor_array, shifts_of
+    from controller.bench import bump_layout, sensor_array, shifts_of
 
     array, layout = sensor_array(pitch), bump_layout(n)
     _, _, cop_shift = shifts_of(result, array, layout)                 # (t, k, 2), t = 1 + len(shifts)
@@ -44,7 +44,7 @@ def run(out_dir, quick: bool = False) -> dict:
     from tqdm import tqdm
 
     from contact.solver import solve_scene
-    from studies._fingertip import BENCH_SIZE_BASE, BENCH_SIZE_CONTACT, bench_scene
+    from controller.bench import BENCH_SIZE_BASE, BENCH_SIZE_CONTACT, bench_scene
 
     out_dir = Path(out_dir)
     arrays = (1, 3) if quick else (1, 2, 3, 4)

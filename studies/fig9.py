@@ -25,7 +25,7 @@ def run(out_dir, quick: bool = False) -> dict:
     from contact.solver import solve_scene
     from controller.calibration import calibrate_gain
     from controller.estimator import estimate_slip
-    from studies._fingertip import (BENCH_SIZE_BASE, BENCH_SIZE_CONTACT, bench_scene, bump_layout, sensor_array,
+    from controller.bench import (BENCH_SIZE_BASE, BENCH_SIZE_CONTACT, bench_scene, bump_layout, sensor_array,
                                     shifts_of)
 
     out_dir = Path(out_dir)

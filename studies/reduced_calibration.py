@@ -61,7 +61,7 @@ class StudyPlan:
 
     @classmethod
     def default(cls, quick: bool = False) -> "StudyPlan":
-        from studies._fingertip import BENCH_SIZE_BASE, BENCH_SIZE_CONTACT, NORMAL_FORCE
+        from controller.bench import BENCH_SIZE_BASE, BENCH_SIZE_CONTACT, NORMAL_FORCE
 
         press = (1.5, 2.0, 3.0, 5.0)
         if quick:      # fig9's quick mesh (shared through the mesh cache); 1 N still has >= 7 points per bump
@@ -90,7 +90,7 @@ def add_arguments(parser) -> None:
 
 def _scene(plan: StudyPlan, name: str, loads, fine_radius: float):
     from contact.scene import BodySpec, ContactSpec, Material, MeshSettings, Scene
-    from studies._fingertip import FRICTION, POISSONS_RATIO, YOUNGS_MODULUS, fingertip_gel
+    from controller.bench import FRICTION, POISSONS_RATIO, YOUNGS_MODULUS, fingertip_gel
 
     return Scene(name=name, gel=fingertip_gel(3), material=Material(YOUNGS_MODULUS, POISSONS_RATIO),
                  body=BodySpec("plane"), contact=ContactSpec(mu=FRICTION),

@@ -1,10 +1,10 @@
 """Table I (closed loop, MuJoCo): grasp success rate and grasp force for the bottle (upright, horizontal) and eclair.
 
 Each trial runs the paper's sequence - grasp on the table, lift 50 mm, hold 4 s, place, release - with the grasp
-force controller on the reduced 3x3-array fingertip (studies._grasp_world), randomised friction mu in [0.4, 1.0],
+force controller on the reduced 3x3-array fingertip (controller.closed_loop), randomised friction mu in [0.4, 1.0],
 grasp position (+-5 mm along the object, +-1 mm in height), object misalignment (+-1 deg) and sensor noise
 (0.5-2 mN per node). Success: the object never touches the table during the hold and no finger exceeds the
-object's crush force (eclair: 10 N, see studies._grasp_world). The controller knows neither mass, moment nor mu.
+object's crush force (eclair: 10 N, see controller.closed_loop). The controller knows neither mass, moment nor mu.
 Outputs: table1.csv (one row per trial, rewritten after each), table1_summary.json, table1.png/pdf.
 """
 
@@ -28,7 +28,7 @@ def add_arguments(parser) -> None:
 
 def run(out_dir, quick: bool = False, trials: int | None = None, seed: int = 1) -> dict:
     """Run the trials of every Table I object; CSV, summary JSON and figure."""
-    from studies._grasp_world import (CONTACT_RATE_HZ, TABLE_I_OBJECTS, random_settings, required_grip_force,
+    from controller.closed_loop import (CONTACT_RATE_HZ, TABLE_I_OBJECTS, random_settings, required_grip_force,
                                       run_trial)
 
     out_dir = Path(out_dir)

@@ -1,4 +1,4 @@
-"""Closed loop in MuJoCo (studies._grasp_world): lift and hold, rotation out of the grasp, and where MuJoCo is imported.
+"""Closed loop in MuJoCo (controller.closed_loop): lift and hold, rotation out of the grasp, and where MuJoCo is imported.
 
 Each trial is a few simulated seconds at 8 kHz (about 5 s of wall time here); the hold is shortened to 0.5-1 s,
 enough because the enforced contact has no creep (a grip that is too weak fails at the lift, not later).
@@ -13,7 +13,7 @@ SHORT = dict(hold_time=0.5, place=False)
 
 
 def test_importing_the_packages_does_not_import_mujoco():
-    code = ("import sys, contact, contact.reduced, controller, studies, studies._grasp_world, studies.table1, "
+    code = ("import sys, contact, contact.reduced, controller, studies, controller.closed_loop, studies.table1, "
             "studies.fig10, studies.fig11\n"
             "from studies._registry import find_studies\n"
             "find_studies()\n"
@@ -23,7 +23,7 @@ def test_importing_the_packages_does_not_import_mujoco():
 
 @pytest.mark.parametrize("field, value", [("friction", 0.0), ("load_ratio", 1.0), ("torque_ratio", -0.2)])
 def test_bad_target_design_names_the_key(field, value):
-    from studies._grasp_world import TargetDesign
+    from controller.closed_loop import TargetDesign
 
     with pytest.raises(ValueError, match=f"targets.{field}={value} outside"):
         TargetDesign(**{field: value})
@@ -33,7 +33,7 @@ mujoco = pytest.importorskip("mujoco")
 
 
 def test_light_object_is_lifted_and_held_without_creep():
-    from studies._grasp_world import GraspObject, TrialSettings, required_grip_force, run_trial
+    from controller.closed_loop import GraspObject, TrialSettings, required_grip_force, run_trial
 
     box = GraspObject("light_box", 0.1, (0.06, 0.05, 0.08), 0.0, 0.04)
     result = run_trial(box, TrialSettings(friction=0.8, hold_time=1.0, place=False))     # creep: the last 0.5 s
@@ -48,7 +48,7 @@ def test_light_object_is_lifted_and_held_without_creep():
 def test_moment_turns_the_object_out_of_the_grasp_without_rotational_detection():
     # the horizontal bottle (120 mN m) at mu = 0.4 needs 10.8 N per finger (FEM-calibrated fingertip); the
     # translational channel alone settles far below it (paper Fig. 10b)
-    from studies._grasp_world import TABLE_I_OBJECTS, TrialSettings, required_grip_force, run_trial
+    from controller.closed_loop import TABLE_I_OBJECTS, TrialSettings, required_grip_force, run_trial
 
     bottle = TABLE_I_OBJECTS["bottle_horizontal"]
     without = run_trial(bottle, TrialSettings(friction=0.4, rotational_slip_detection=False, **SHORT))

@@ -25,7 +25,7 @@ def test_knee_is_the_cheapest_row_within_the_factor_of_the_best():
 
 
 def test_array_scene_shears_in_equal_steps_to_the_final_load():
-    from studies import _fingertip as tip
+    from controller import bench as tip
 
     final = ARRAY_LOAD_RATIO * tip.FRICTION * tip.NORMAL_FORCE
     press, shear = array_scene(0.6, order=1, n_shear=5).loads

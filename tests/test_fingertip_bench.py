@@ -7,7 +7,7 @@ import pytest
 
 def test_sensor_conserves_the_fem_base_force():
     from contact.solver import solve_scene
-    from studies._fingertip import bench_scene, sensor_array, sensor_readings
+    from controller.bench import bench_scene, sensor_array, sensor_readings
 
     result = solve_scene(bench_scene(1, "shift", (0.1,), 0.8, 2.0))
     readings = sensor_readings(result, sensor_array(1.0))

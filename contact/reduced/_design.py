@@ -28,7 +28,7 @@ mesh, load paths, fit residuals and the error on held-out FEM paths. Against the
 k_n +14 % (the plate approach grows like P^0.64, no base settlement), c_a +1.5 %, G* -44 % (bump bending and base
 shear), G_t -22 %, s = 7.9 mm (the base pressure is wider than half a pitch), and for the CoP g ~ 0, h = 5.2 mm: the
 base CoP follows the overturning moment h Q_i / P_i, not the displacement (told apart by the two normal forces; at one
-force the two terms are collinear). The closed loop (studies._grasp_world.default_tip) runs on these calibrated
+force the two terms are collinear). The closed loop (controller.closed_loop.default_tip) runs on these calibrated
 parameters; ``from_design`` gives the closed forms.
 """
 

@@ -1,7 +1,7 @@
-"""Test fixture: closed-form contact of one Hertz fingertip (hemisphere) under a tangential force and a moment.
+"""Closed-form contact plant of one Hertz fingertip (hemisphere) under a tangential force and a moment.
 
-Not part of the package: the single-hemisphere plant the grasp controller is tested against (contact.reduced models the
-3x3 array fingertip of the closed loop and shares its Lubkin table).
+The single-hemisphere plant the grasp controller is tested against without MuJoCo (contact.reduced models the 3x3
+array fingertip of the closed loop and shares its Lubkin table).
 
 Model (contact.theory, THEORY.md secs. 3.2 and 4), rigid object on an elastic hemisphere (R, E, nu):
     contact radius  a(P) from Hertz with E* = E / (1 - nu^2),

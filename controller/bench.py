@@ -1,4 +1,4 @@
-"""The virtual bench of Figs. 6 and 9: an n x n hemisphere-array fingertip under a rigid plate, read by the sensor.
+"""The FEM virtual bench of Figs. 6 and 9: an n x n hemisphere-array fingertip under a rigid plate, read by the sensor.
 
 The FEM gives the pressure on the gel's base (the sensor plane); controller.sensor integrates it over the nodes'
 cells and controller.estimator turns the readings into per-bump shear displacements and the eq. 9 rigid transform
@@ -8,6 +8,10 @@ cells and controller.estimator turns the readings into per-bump shear displaceme
 from __future__ import annotations
 
 import numpy as np
+
+__all__ = ["FOOTPRINT", "BASE_THICKNESS", "BUMP_FILL", "YOUNGS_MODULUS", "POISSONS_RATIO", "FRICTION", "NORMAL_FORCE",
+           "BENCH_SIZE_CONTACT", "BENCH_SIZE_BASE", "fingertip_gel", "bench_scene", "sensor_readings", "sensor_array",
+           "bump_layout", "shifts_of"]
 
 FOOTPRINT = 40.0          # mm, square fingertip (paper sec. IV-B)
 BASE_THICKNESS = 3.0      # mm, gel layer between the bumps and the sensor
