@@ -149,17 +149,22 @@ class GraspForceController:
         return self.minimum_force is not None
 
     def _regulate(self, filtered: np.ndarray, references) -> None:
-        """The grasp law of the module docstring."""
+        """The grasp law of the module docstring (scalar arithmetic: it runs at 1 kHz)."""
         p = self.parameters
-        ratios = np.minimum(np.abs(filtered) / np.asarray(references), p.ratio_limit)
         gamma = p.loop_rate * self.sample_period
-        change = gamma * self.command * (ratios**self.exponents - 1.0)
+        changes = []
+        for value, reference, exponent in zip(filtered.tolist(), references, self.exponents.tolist()):
+            ratio = min(abs(value) / reference, p.ratio_limit)
+            changes.append(gamma * self.command * (ratio**exponent - 1.0))
         if not p.rotational_slip_detection:
-            change[1] = 0.0                             # the channel is off: it neither adds force nor blocks draining
-        if np.any(change > 0.0):
-            change = np.maximum(change, 0.0)            # no channel drains while another asks for more force
-        self.components = np.clip(self.components + change, 0.0, p.maximum_force - self.minimum_force)
-        self.command = min(self.minimum_force + self.components.sum(), p.maximum_force)
+            changes[1] = 0.0                            # the channel is off: it neither adds force nor blocks draining
+        if changes[0] > 0.0 or changes[1] > 0.0:
+            changes = [max(change, 0.0) for change in changes]   # no channel drains while another asks for more force
+        upper = p.maximum_force - self.minimum_force
+        components = [min(max(float(component) + change, 0.0), upper)
+                      for component, change in zip(self.components, changes)]
+        self.components = np.array(components)
+        self.command = min(self.minimum_force + components[0] + components[1], p.maximum_force)
 
     def _release(self, filtered: np.ndarray) -> None:
         """The release law of the module docstring (no minimum force)."""

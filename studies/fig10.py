@@ -47,7 +47,7 @@ def run(out_dir, quick: bool = False) -> dict:
     hold = 2.0 if quick else 4.0
     results, rows, summary = {}, [], []
     for case, (name, rotation, friction, targets) in _cases().items():
-        result = run_trial(TABLE_I_OBJECTS[name], TrialSettings(friction=friction, rotational_slip_detection=rotation,
+        result = run_trial(TABLE_I_OBJECTS[name], TrialSettings(friction_coefficient=friction, rotational_slip_detection=rotation,
                                                                 hold_time=hold, seed=3, targets=targets))
         results[case] = result
         trace = result.trace
@@ -57,7 +57,7 @@ def run(out_dir, quick: bool = False) -> dict:
                              shear_displacement=trace["shear_displacement"][i], twist_angle=trace["twist_angle"][i],
                              object_rotation=trace["rotation"][i], object_height_m=trace["object_height_m"][i]))
         needed = required_grip_force(TABLE_I_OBJECTS[name], friction)
-        summary.append(dict(case=case, friction=friction, design_load_ratio=targets.load_ratio,
+        summary.append(dict(case=case, friction_coefficient=friction, design_load_ratio=targets.load_ratio,
                             rotational_detection=rotation, success=result.success, dropped=result.dropped,
                             crushed=result.crushed, rotated=result.rotated, max_rotation_mrad=result.max_rotation_mrad,
                             hold_force_mean=result.hold_force_mean, max_force=result.max_force, needed_force=needed))

@@ -50,7 +50,7 @@ def tau_min(obj, steps: int, rng, settings_base) -> tuple[float, int]:
                            seed=int(rng.integers(2**31)))
         return run_trial(obj, settings).success
 
-    theory = required_grip_force(obj, settings_base.friction)
+    theory = required_grip_force(obj, settings_base.friction_coefficient)
     low, high, count = 0.7 * theory, 1.5 * theory, 0
     while not succeeds(high):
         low, high, count = high, 1.5 * high, count + 1
@@ -74,7 +74,7 @@ def _designs():
 
 def predicted_ratio(design) -> float:
     """tau / tau_min the targets should give in full stick at FRICTION: mu / (mu_design x_design) [-]."""
-    return FRICTION / (design.friction * design.load_ratio)
+    return FRICTION / (design.friction_coefficient * design.load_ratio)
 
 
 def run(out_dir, quick: bool = False, trials: int | None = None) -> dict:
@@ -88,11 +88,11 @@ def run(out_dir, quick: bool = False, trials: int | None = None) -> dict:
     rows = []
     for mass, lever in _cases(quick):
         obj = GraspObject(f"box_{mass:g}kg_{1e3 * lever:g}mm", mass, SIZE, lever, 0.035)
-        minimum, bisection_trials = tau_min(obj, steps, rng, TrialSettings(friction=FRICTION))
+        minimum, bisection_trials = tau_min(obj, steps, rng, TrialSettings(friction_coefficient=FRICTION))
         for label, design in _designs().items():
             forces = []
             for _ in range(trials):
-                settings = random_settings(rng, friction=FRICTION, place=False, hold_time=2.0 if quick else 4.0,
+                settings = random_settings(rng, friction_coefficient=FRICTION, place=False, hold_time=2.0 if quick else 4.0,
                                            targets=design)
                 result = run_trial(obj, settings)
                 forces.append(result.hold_force_mean if result.success else np.nan)
@@ -100,7 +100,7 @@ def run(out_dir, quick: bool = False, trials: int | None = None) -> dict:
             held = forces[np.isfinite(forces)]
             mean = float(held.mean()) if held.size else np.nan
             rows.append(dict(mass_kg=mass, lever_mm=1e3 * lever, moment_nmm=mass * 9.81 * lever * 1e3, design=label,
-                             design_friction=design.friction, design_load_ratio=design.load_ratio,
+                             design_friction=design.friction_coefficient, design_load_ratio=design.load_ratio,
                              tau_mean=mean, tau_min_trials=float(held.min()) if held.size else np.nan,
                              tau_max_trials=float(held.max()) if held.size else np.nan,
                              failed_trials=int(forces.size - held.size), tau_min=minimum,

@@ -28,7 +28,7 @@ def add_arguments(parser) -> None:
 
 def run(out_dir, quick: bool = False, trials: int | None = None, seed: int = 1) -> dict:
     """Run the trials of every Table I object; CSV, summary JSON and figure."""
-    from controller.closed_loop import (CONTACT_RATE_HZ, TABLE_I_OBJECTS, random_settings, required_grip_force,
+    from controller.closed_loop import (PHYSICS_RATE_HZ, TABLE_I_OBJECTS, random_settings, required_grip_force,
                                       run_trial)
 
     out_dir = Path(out_dir)
@@ -39,9 +39,9 @@ def run(out_dir, quick: bool = False, trials: int | None = None, seed: int = 1) 
         for trial in range(trials):
             settings = random_settings(rng)
             result = run_trial(obj, settings)
-            required = required_grip_force(obj, settings.friction)
+            required = required_grip_force(obj, settings.friction_coefficient)
             rows.append(dict(object=name, trial=trial, mass_kg=obj.mass, moment_nmm=1e3 * obj.moment_nm,
-                             friction=settings.friction, grasp_offset_x_mm=1e3 * settings.grasp_offset[0],
+                             friction_coefficient=settings.friction_coefficient, grasp_offset_x_mm=1e3 * settings.grasp_offset[0],
                              grasp_offset_z_mm=1e3 * settings.grasp_offset[1],
                              misalignment_deg=math.degrees(settings.misalignment), sensor_noise=settings.sensor_noise,
                              success=result.success, dropped=result.dropped, crushed=result.crushed,
@@ -53,7 +53,7 @@ def run(out_dir, quick: bool = False, trials: int | None = None, seed: int = 1) 
                              rotation_creep_mrad_per_s=result.rotation_creep_mrad_per_s,
                              real_time_factor=result.real_time_factor))
             write_csv_atomic(out_dir / f"{NAME}.csv", rows)          # after every trial: nothing computed is lost
-            print(f"{NAME}: {name} trial {trial}: mu {settings.friction:.2f} success {result.success} "
+            print(f"{NAME}: {name} trial {trial}: mu {settings.friction_coefficient:.2f} success {result.success} "
                   f"hold force {result.hold_force_mean:.2f} N (needed {required:.2f} N), "
                   f"creep {result.creep_um_per_s:.3f} um/s, real-time factor {result.real_time_factor:.2f}")
     summary = _summary(rows)
@@ -64,7 +64,7 @@ def run(out_dir, quick: bool = False, trials: int | None = None, seed: int = 1) 
               f"{entry['force_ratio_mean']:.2f}, creep {entry['creep_um_per_s_max']:.3f} um/s max, "
               f"largest rotation in the grasp {entry['max_rotation_mrad']:.1f} mrad ({entry['rotated']} turned out)")
     print(f"{NAME}: benchmark: real-time factor of one trial {summary['real_time_factor_mean']:.2f} "
-          f"(simulated s per wall s; MuJoCo 8 kHz, contact {CONTACT_RATE_HZ / 1e3:g} kHz, control 1 kHz, sensor 100 Hz)")
+          f"(simulated s per wall s; MuJoCo and contact {PHYSICS_RATE_HZ / 1e3:g} kHz, actuator 8 kHz, control 1 kHz, sensor 100 Hz)")
     save_figure(_plot(rows, summary), out_dir, NAME)
     return {"max_error": summary["worst_failure_rate"], "error_meaning": "failure rate of the worst object",
             **summary}
@@ -106,7 +106,7 @@ def _plot(rows, summary):
     for i, name in enumerate(names):
         mine = [row for row in rows if row["object"] == name]
         jitter = np.linspace(-0.15, 0.15, len(mine)) if len(mine) > 1 else [0.0]
-        axes[1].scatter(i + np.asarray(jitter), [r["hold_force_mean"] for r in mine], c=[r["friction"] for r in mine],
+        axes[1].scatter(i + np.asarray(jitter), [r["hold_force_mean"] for r in mine], c=[r["friction_coefficient"] for r in mine],
                         cmap="viridis", vmin=0.4, vmax=1.0, zorder=3)
         axes[1].scatter(i + np.asarray(jitter), [r["required_force"] for r in mine], marker="_", s=200, c="k",
                         zorder=4, label="needed (reduced model)" if i == 0 else None)

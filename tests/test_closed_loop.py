@@ -21,7 +21,7 @@ def test_importing_the_packages_does_not_import_mujoco():
     subprocess.run([sys.executable, "-c", code], check=True)
 
 
-@pytest.mark.parametrize("field, value", [("friction", 0.0), ("load_ratio", 1.0), ("torque_ratio", -0.2)])
+@pytest.mark.parametrize("field, value", [("friction_coefficient", 0.0), ("load_ratio", 1.0), ("torque_ratio", -0.2)])
 def test_bad_target_design_names_the_key(field, value):
     from controller.closed_loop import TargetDesign
 
@@ -36,7 +36,7 @@ def test_light_object_is_lifted_and_held_without_creep():
     from controller.closed_loop import GraspObject, TrialSettings, required_grip_force, run_trial
 
     box = GraspObject("light_box", 0.1, (0.06, 0.05, 0.08), 0.0, 0.04)
-    result = run_trial(box, TrialSettings(friction=0.8, hold_time=1.0, place=False))     # creep: the last 0.5 s
+    result = run_trial(box, TrialSettings(friction_coefficient=0.8, hold_time=1.0, place=False))     # creep: the last 0.5 s
     assert result.success and not result.dropped
     assert result.hold_force_mean > required_grip_force(box, 0.8)
     # stick is enforced (anchored bumps): the held object drifts only with the grip-force ripple,
@@ -51,8 +51,8 @@ def test_moment_turns_the_object_out_of_the_grasp_without_rotational_detection()
     from controller.closed_loop import TABLE_I_OBJECTS, TrialSettings, required_grip_force, run_trial
 
     bottle = TABLE_I_OBJECTS["bottle_horizontal"]
-    without = run_trial(bottle, TrialSettings(friction=0.4, rotational_slip_detection=False, **SHORT))
-    with_detection = run_trial(bottle, TrialSettings(friction=0.4, **SHORT))
+    without = run_trial(bottle, TrialSettings(friction_coefficient=0.4, rotational_slip_detection=False, **SHORT))
+    with_detection = run_trial(bottle, TrialSettings(friction_coefficient=0.4, **SHORT))
     rotation = lambda result: max(abs(r) for r in result.trace["rotation"])          # [rad]
     assert rotation(without) > 0.1 and not without.success                  # rotated out, its end on the table
     assert without.rotated and without.max_rotation_mrad > 100.0

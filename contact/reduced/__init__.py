@@ -8,7 +8,7 @@ design, and ``load_calibrated()`` / ``ReducedFingertip.calibrated()`` read the F
 ``contact/reduced/data`` (stored with its design and provenance, ``_store``).
 """
 
-from ._bumps import (BumpResponse, bump_response, full_stick_stiffness, lubkin_stick_ratio, mindlin_displacement_ratio,
+from ._bumps import (BumpResponse, bump_law, bump_response, full_stick_stiffness, lubkin_stick_ratio, mindlin_displacement_ratio,
                      mindlin_load_ratio, normal_split, normalized_lubkin_torque, normalized_lubkin_twist)
 from ._design import ArrayFingertipDesign, ReducedParameters
 from ._model import BaseGrid, ContactState, ReducedFingertip, SlipMode
@@ -17,7 +17,7 @@ from ._store import (PACKAGED_CALIBRATION, StoredCalibration, load_calibrated, l
                      save_calibration)
 
 __all__ = ["ArrayFingertipDesign", "ReducedParameters", "ReducedFingertip", "ContactState", "SlipMode", "BaseGrid",
-           "BumpResponse", "bump_response", "normal_split", "full_stick_stiffness", "mindlin_load_ratio",
+           "BumpResponse", "bump_response", "bump_law", "normal_split", "full_stick_stiffness", "mindlin_load_ratio",
            "mindlin_displacement_ratio", "normalized_lubkin_twist", "normalized_lubkin_torque", "lubkin_stick_ratio",
            "PathSamples", "StoredCalibration", "PACKAGED_CALIBRATION", "save_calibration", "load_calibration",
            "load_calibrated", "parse_calibration"]

@@ -17,16 +17,18 @@ translation still sticks has its stick annulus slipping in torsion only.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from contact.theory import LUBKIN_SLIP_TORQUE_RATIO, lubkin_torque_twist
 
 from ._design import ReducedParameters
 
 __all__ = ["BumpResponse", "bump_response", "normal_split", "normalized_lubkin_twist", "normalized_lubkin_torque",
-           "lubkin_stick_ratio", "mindlin_load_ratio", "mindlin_displacement_ratio", "full_stick_stiffness"]
+           "lubkin_stick_ratio", "mindlin_load_ratio", "mindlin_displacement_ratio", "full_stick_stiffness", "bump_law"]
 
 # Lubkin's twist, tabulated once in dimensionless form theta G a^2 / (mu P) against T / (mu P a), parametric in c/a
 # (contact.theory.lubkin_torque_twist costs milliseconds per call; a table serves a 1 kHz loop). 460 stick ratios,
@@ -115,41 +117,98 @@ def bump_response(normal_force, shear_displacement, twist, friction, parameters:
     Mindlin: Q = mu P [1 - (1 - |delta| / delta_s)^(3/2)], delta_s = 3 mu P / (4 G* a); Lubkin:
     T = mu P a g(|phi| G_t a^2 / (mu P)), g the inverse normalised Lubkin twist; combined limit: the ellipse of the
     module docstring. A bump with P_i = 0 carries nothing. ``friction`` mu (> 0) may be a scalar or broadcast.
+    Evaluated bump by bump by the compiled ``bump_law`` (the same law the closed loop steps with).
     """
-    force = np.maximum(np.asarray(normal_force, dtype=float), 0.0)
+    force = np.asarray(normal_force, dtype=float)
     displacement = np.asarray(shear_displacement, dtype=float)
     twist = np.asarray(twist, dtype=float)
-    touching = force > 0.0
-    safe_force = np.where(touching, force, 1.0)
-    radius = parameters.radius_coefficient * np.cbrt(safe_force)                      # (..., k) [mm]
-    limit_force = friction * safe_force                                              # mu P [N]
-    slip_displacement = 3.0 * limit_force / (4.0 * parameters.tangential_modulus * radius)
-    magnitude = np.sqrt(displacement[..., 0] ** 2 + displacement[..., 1] ** 2)
-    load_ratio = mindlin_load_ratio(magnitude / slip_displacement)
-    twist_scale = limit_force / (parameters.torsional_modulus * radius**2)           # mu P / (G a^2) [rad]
-    torque_ratio = normalized_lubkin_torque(np.abs(twist) / twist_scale)
-    spin_limit = LUBKIN_SLIP_TORQUE_RATIO * limit_force * radius                      # T_slip [N mm]
-    demand = np.hypot(limit_force * magnitude, spin_limit * np.abs(twist))            # flow point on the ellipse
-    demand = np.where(demand > 0.0, demand, 1.0)
-    flow_load = np.where(magnitude > 0.0, limit_force * magnitude / demand, 0.0)
-    flow_torque = np.where(twist != 0.0, spin_limit * np.abs(twist) / demand, 1.0)
-    sliding = touching & (load_ratio >= flow_load) & (torque_ratio >= LUBKIN_SLIP_TORQUE_RATIO * flow_torque)
-    load_ratio = np.minimum(load_ratio, flow_load)
-    torque_ratio = np.minimum(torque_ratio, LUBKIN_SLIP_TORQUE_RATIO * flow_torque)
-    load_ratio, torque_ratio = np.where(touching, load_ratio, 0.0), np.where(touching, torque_ratio, 0.0)
-    direction = displacement / np.where(magnitude > 0.0, magnitude, 1.0)[..., None]
-    limit_magnitude = np.where(sliding, slip_displacement * mindlin_displacement_ratio(load_ratio), magnitude)
-    limit_twist = np.where(sliding, np.sign(twist) * twist_scale * normalized_lubkin_twist(torque_ratio), twist)
+    shape = np.broadcast_shapes(force.shape, displacement.shape[:-1], twist.shape, np.shape(friction))
+    flat = [np.ascontiguousarray(np.broadcast_to(value, shape), dtype=float).ravel()
+            for value in (force, displacement[..., 0], displacement[..., 1], twist, friction)]
+    out = _bump_laws(*flat, parameters.radius_coefficient, parameters.tangential_modulus,
+                     parameters.torsional_modulus)                                          # (10, n)
+    sliding = out[7].astype(bool).reshape(shape)
+    pair = lambda row: np.stack([out[row], out[row + 1]], axis=-1).reshape(shape + (2,))     # noqa: E731
     return BumpResponse(
-        contact_radius=np.where(touching, radius, 0.0),
-        tangential_force=(limit_force * load_ratio)[..., None] * direction,
-        torque=np.sign(twist) * limit_force * radius * torque_ratio,
-        load_ratio=load_ratio, torque_ratio=torque_ratio,
-        stick_ratio_translational=np.where(sliding | ~touching, 0.0, np.cbrt(1.0 - load_ratio)),
-        stick_ratio_rotational=np.where(sliding | ~touching, 0.0, lubkin_stick_ratio(torque_ratio)),
-        sliding=sliding,
-        limit_displacement=np.where(touching[..., None], limit_magnitude[..., None] * direction, 0.0),
-        limit_twist=np.where(touching, limit_twist, 0.0))
+        contact_radius=out[0].reshape(shape), tangential_force=pair(1), torque=out[3].reshape(shape),
+        load_ratio=out[4].reshape(shape), torque_ratio=out[5].reshape(shape),
+        stick_ratio_translational=out[6].reshape(shape), stick_ratio_rotational=out[10].reshape(shape),
+        sliding=sliding, limit_displacement=pair(8), limit_twist=out[11].reshape(shape))
+
+
+@njit(cache=True, inline="always")
+def _interpolate(value, grid, values):
+    """np.interp(value, grid, values) for an increasing grid, by bisection (numba's np.interp scans linearly)."""
+    if value <= grid[0]:
+        return values[0]
+    last = grid.size - 1
+    if value >= grid[last]:
+        return values[last]
+    low, high = 0, last
+    while high - low > 1:
+        middle = (low + high) // 2
+        if grid[middle] <= value:
+            low = middle
+        else:
+            high = middle
+    weight = (value - grid[low]) / (grid[high] - grid[low])
+    return values[low] + weight * (values[high] - values[low])
+
+
+@njit(cache=True)
+def bump_law(force, shear_x, shear_y, twist, friction, radius_coefficient, tangential_modulus, torsional_modulus):
+    """One bump: the law of ``bump_response`` for scalars (compiled; the closed loop calls it at every step).
+
+    Returns (contact_radius [mm], Q_x, Q_y [N], torque [N mm], load_ratio, torque_ratio, stick_ratio_translational,
+    sliding (0/1), elastic_x, elastic_y [mm], stick_ratio_rotational, elastic_twist [rad]), the elastic part being
+    ``limit_displacement`` / ``limit_twist`` of ``BumpResponse``.
+    """
+    if not force > 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    radius = radius_coefficient * np.cbrt(force)
+    limit_force = friction * force                                                   # mu P [N]
+    slip_displacement = 3.0 * limit_force / (4.0 * tangential_modulus * radius)
+    magnitude = math.hypot(shear_x, shear_y)
+    load_ratio = 1.0 - (1.0 - min(magnitude / slip_displacement, 1.0)) ** 1.5        # Mindlin
+    twist_scale = limit_force / (torsional_modulus * radius * radius)                # mu P / (G a^2) [rad]
+    spin = abs(twist)
+    torque_ratio = _interpolate(spin / twist_scale, _TWISTS, _TORQUE_RATIOS)           # Lubkin
+    spin_limit = LUBKIN_SLIP_TORQUE_RATIO * limit_force * radius                      # T_slip [N mm]
+    demand = math.hypot(limit_force * magnitude, spin_limit * spin)                   # flow point on the ellipse
+    if not demand > 0.0:
+        demand = 1.0
+    flow_load = limit_force * magnitude / demand if magnitude > 0.0 else 0.0
+    flow_torque = spin_limit * spin / demand if twist != 0.0 else 1.0
+    sliding = load_ratio >= flow_load and torque_ratio >= LUBKIN_SLIP_TORQUE_RATIO * flow_torque
+    load_ratio = min(load_ratio, flow_load)
+    torque_ratio = min(torque_ratio, LUBKIN_SLIP_TORQUE_RATIO * flow_torque)
+    unit_x, unit_y = (shear_x / magnitude, shear_y / magnitude) if magnitude > 0.0 else (shear_x, shear_y)
+    sign = 1.0 if twist > 0.0 else (-1.0 if twist < 0.0 else 0.0)
+    if sliding:
+        elastic = slip_displacement * (1.0 - (1.0 - min(load_ratio, 1.0)) ** (2.0 / 3.0))
+        elastic_twist = sign * twist_scale * _interpolate(torque_ratio, _TORQUE_RATIOS, _TWISTS)
+        stick_translational = stick_rotational = 0.0
+    else:
+        elastic, elastic_twist = magnitude, twist
+        stick_translational = np.cbrt(1.0 - load_ratio)
+        stick_rotational = 0.0 if torque_ratio >= _TORQUE_RATIOS[-1] else _interpolate(torque_ratio, _TORQUE_RATIOS,
+                                                                                        _STICK_RATIOS)
+    tangential = limit_force * load_ratio
+    return (radius, tangential * unit_x, tangential * unit_y, sign * limit_force * radius * torque_ratio, load_ratio,
+            torque_ratio, stick_translational, 1.0 if sliding else 0.0, elastic * unit_x, elastic * unit_y,
+            stick_rotational, elastic_twist)
+
+
+@njit(cache=True)
+def _bump_laws(force, shear_x, shear_y, twist, friction, radius_coefficient, tangential_modulus, torsional_modulus):
+    """``bump_law`` over flat arrays (n,): rows (12, n) in its return order."""
+    out = np.zeros((12, force.size))
+    for i in range(force.size):
+        row = bump_law(force[i], shear_x[i], shear_y[i], twist[i], friction[i], radius_coefficient,
+                       tangential_modulus, torsional_modulus)
+        for j in range(12):
+            out[j, i] = row[j]
+    return out
 
 
 def full_stick_stiffness(normal_force, parameters: ReducedParameters):

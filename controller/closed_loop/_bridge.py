@@ -1,114 +1,159 @@
-"""Reduced-model contact of the two fingertips with the object, applied to MuJoCo through xfrc_applied."""
+"""Reduced-model contact of the two fingertips with the object: the kernel's arrays and their views (mm, N, N mm).
+
+The only place where SI (MuJoCo) meets mm / N / N mm (the reduced model): ``_kernel.physics_step`` converts, this
+class lays out its configuration and state and shows the per-bump results to the sensing chain. Finger f's sensor
+frame has its normal z_s toward the object (+y for the left finger, -y for the right), x_s = +x, y_s = z_s x x_s.
+"""
 
 from __future__ import annotations
 
-import math
+import functools
+from pathlib import Path
 
 import numpy as np
 
-from contact.reduced import ReducedFingertip, bump_response, full_stick_stiffness
+from contact.reduced import ReducedFingertip
+from controller.acceleration_control import AccelerationControlParameters
+from controller.filters import FirstOrderLowPass
 
-from ._trial import CONTACT_RATE_HZ, MM_PER_M, GraspObject
+from . import _kernel as K
+from ._trial import MM_PER_M, GraspObject
+
+FRAMES = np.array([[[1, 0, 0], [0, 0, -1], [0, 1, 0]],
+                   [[1, 0, 0], [0, 0, 1], [0, -1, 0]]], dtype=float)          # (2 fingers, rows x_s y_s z_s, 3)
+FACE_SIGN = np.array([1.0, -1.0])          # depth d = half_y + sign * y_object: the left finger touches the -y face
+FINGER_MASS = 0.01                          # kg, the finger body (its travel adds the actuator armature J_n / r^2)
+FINGER_DAMPING = 0.4                        # N s/m, finger slide
 
 
 class ContactBridge:
-    """Reduced-model contact of the two fingertips with the object's y faces, applied through xfrc_applied.
+    """Contact state of both fingertips and the compiled step that advances it (``step``).
 
-    The only place where SI (MuJoCo) meets mm / N / N mm (reduced model). Finger f's sensor frame has its normal z_s
-    toward the object (+y for the left finger, -y for the right), x_s = +x, y_s = z_s x x_s.
+    Parameters
+    ----------
+    model : mujoco.MjModel -- the world of ``_world._mjcf`` (bodies "object", "arm"; mocap fingers).
+    tip : ReducedFingertip -- both fingertips.
+    obj : GraspObject -- the object (its half sizes bound the faces).
+    friction_coefficient : float -- Coulomb friction coefficient fingertip-object [-].
+    acceleration : AccelerationControlParameters -- the actuator loop (its rate sets the sub-steps).
+    finger_offset_m : float -- distance of each finger origin from the grasp axis at zero closing [m].
+    implicit : bool -- couple the contact to the object implicitly (``_kernel``); False: explicitly, for comparison.
     """
 
-    def __init__(self, model, data, tip: ReducedFingertip, obj: GraspObject, friction: float):
+    def __init__(self, model, tip: ReducedFingertip, obj: GraspObject, friction_coefficient: float,
+                 acceleration: AccelerationControlParameters, finger_offset_m: float, implicit: bool = True):
         import mujoco
 
-        self.mujoco, self.model, self.data, self.tip, self.friction = mujoco, model, data, tip, friction
-        self.object_id = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, "object")
-        self.finger_ids = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, n) for n in ("finger_left",
-                                                                                          "finger_right")]
-        self.frames = np.array([[[1, 0, 0], [0, 0, -1], [0, 1, 0]],
-                                [[1, 0, 0], [0, 0, 1], [0, -1, 0]]], dtype=float)      # (2, 3 axes, 3) rows x,y,z_s
-        self.face_sign = np.array([1.0, -1.0])                 # d = half_y + sign * y_object (left: -y face)
-        self.half_size_mm = np.array(obj.size) * 0.5 * MM_PER_M
-        centres = tip.centres                                                          # (k, 2) [mm]
-        self.tip_offsets_mm = np.einsum("kc,fcd->fkd", centres, self.frames[:, :2])    # (2, k, 3) world offsets
-        shape = (2, len(centres))
-        self.anchor_mm = np.zeros(shape + (3,))                # anchors in object coordinates
-        self.anchor_angle = np.zeros(shape)                    # object rotation about z_s at the anchor [rad]
-        self.touching = np.zeros(shape, dtype=bool)
-        self.previous_depth_mm = np.zeros(shape)
-        self.previous_elastic_mm = np.zeros(shape + (2,))
-        self.period = 1.0 / CONTACT_RATE_HZ
-        # public state (mm, N, N mm) for the sensor and the controller
-        self.normal_force = np.zeros(shape)
-        self.contact_radius = np.zeros(shape)
-        self.shear_displacement = np.zeros(shape + (2,))
-        self.tangential_force = np.zeros(shape + (2,))
-        self.sliding = np.zeros(shape, dtype=bool)
-        self.grip_force_n = 0.0
+        body = lambda name: mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)       # noqa: E731
+        joint = lambda name: mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)     # noqa: E731
+        self.object_id, self.arm_id = body("object"), body("arm")
+        substeps = acceleration.sample_rate_hz * float(model.opt.timestep)
+        p = tip.parameters
+        armature = acceleration.nominal_inertia / MM_PER_M / (acceleration.arm_radius / MM_PER_M) ** 2   # kg
+        config = np.zeros(K.C_SIZE)
+        config[[K.C_NORMAL_STIFFNESS, K.C_RADIUS_COEFFICIENT, K.C_TANGENTIAL_MODULUS, K.C_TORSIONAL_MODULUS,
+                K.C_DAMPING_TIME, K.C_FRICTION]] = (p.normal_stiffness, p.radius_coefficient, p.tangential_modulus,
+                                                    p.torsional_modulus, p.damping_time, friction_coefficient)
+        config[K.C_OBJECT_MASS] = model.body_mass[self.object_id]
+        config[[K.C_INERTIA_X, K.C_INERTIA_Y, K.C_INERTIA_Z]] = model.body_inertia[self.object_id]
+        config[[K.C_FINGER_MASS, K.C_FINGER_DAMPING]] = FINGER_MASS + armature, FINGER_DAMPING
+        config[K.C_FINGER_OFFSET] = finger_offset_m * MM_PER_M
+        config[[K.C_ARM_RADIUS, K.C_NOMINAL_INERTIA, K.C_TARGET_INERTIA, K.C_TARGET_DAMPING, K.C_TORQUE_LIMIT]] = (
+            acceleration.arm_radius, acceleration.nominal_inertia, acceleration.target_inertia,
+            acceleration.target_damping, acceleration.torque_limit)
+        config[K.C_DOB_GAIN] = FirstOrderLowPass(acceleration.dob_cutoff_hz, acceleration.sample_rate_hz)._gain
+        config[K.C_USE_DOB] = 1.0
+        config[K.C_IMPLICIT] = 1.0 if implicit else 0.0
+        config[K.C_SUBSTEPS], config[K.C_STEP] = round(substeps), float(model.opt.timestep)
+        config[[K.C_HALF_X, K.C_HALF_Y, K.C_HALF_Z]] = 0.5 * np.asarray(obj.size) * MM_PER_M
+        config[[K.C_OBJECT_BODY, K.C_ARM_BODY]] = self.object_id, self.arm_id
+        config[K.C_OBJECT_DOF] = model.jnt_dofadr[joint("object")]
+        config[K.C_ARM_DOF] = model.jnt_dofadr[joint("lift")]
+        self.config = config
+        self.count = len(tip.centres)
+        offsets = np.einsum("kc,fcd->fkd", tip.centres, FRAMES[:, :2])                     # (2, k, 3) [mm]
+        geometry = np.zeros((2, self.count, K.G_SIZE))
+        geometry[..., K.G_OFFSET:K.G_OFFSET + 3] = offsets
+        for axis, column in enumerate((K.G_X, K.G_Y, K.G_Z)):
+            geometry[..., column:column + 3] = FRAMES[:, None, axis]
+        geometry[..., K.G_FACE] = FACE_SIGN[:, None]
+        self.geometry = geometry.reshape(-1, K.G_SIZE)
+        self.state = np.zeros(K.S_SIZE)
+        self.bumps = np.zeros((2 * self.count, K.B_SIZE))
+        self.out = np.zeros((2 * self.count, K.O_SIZE))
 
-    def object_rotation(self) -> np.ndarray:
-        """Object rotation about each finger's normal z_s [rad] (2,): about +y for the left, -y for the right."""
-        rotation = self.data.xmat[self.object_id].reshape(3, 3)
-        angle = math.atan2(rotation[0, 2], rotation[0, 0])
-        return np.array([angle, -angle])
+    def step(self, data, force_command: float) -> None:
+        """Advance gripper and contact by one physics step; leaves the wrenches in ``data.xfrc_applied``."""
+        K.physics_step(self.config, self.geometry, self.state, self.bumps, self.out, data.xpos, data.xmat,
+                       data.xipos, data.qvel, data.xfrc_applied, data.mocap_pos, float(force_command))
 
-    def update(self) -> None:
-        """Evaluate the reduced model at the current poses and write the wrenches to xfrc_applied."""
-        data = self.data
-        object_position_mm = data.xpos[self.object_id] * MM_PER_M
-        object_rotation = data.xmat[self.object_id].reshape(3, 3)
-        fingers_mm = data.xpos[self.finger_ids] * MM_PER_M                             # (2, 3)
-        tips_mm = fingers_mm[:, None, :] + self.tip_offsets_mm                          # (2, k, 3)
-        local_mm = (tips_mm - object_position_mm) @ object_rotation                     # object coordinates
-        depth_mm = self.half_size_mm[1] + self.face_sign[:, None] * local_mm[..., 1]
-        inside = (np.abs(local_mm[..., 0]) <= self.half_size_mm[0]) & (np.abs(local_mm[..., 2]) <= self.half_size_mm[2])
-        touching = (depth_mm > 0.0) & inside
-        angle = self.object_rotation()
-        new = touching & ~self.touching
-        if np.any(new):                                                                 # anchor at first touch
-            surface = local_mm.copy()
-            surface[..., 1] = -self.face_sign[:, None] * self.half_size_mm[1]
-            self.anchor_mm[new] = surface[new]
-            self.anchor_angle[new] = np.broadcast_to(angle[:, None], new.shape)[new]
-            self.previous_elastic_mm[new] = 0.0
-        self.touching = touching
-        p = self.tip.parameters
-        depth = np.where(touching, depth_mm, 0.0)
-        rate = np.where(touching & (self.previous_depth_mm > 0.0), (depth - self.previous_depth_mm) / self.period, 0.0)
-        self.previous_depth_mm = depth
-        normal = p.normal_stiffness * depth**1.5 + p.damping_time * 1.5 * p.normal_stiffness * np.sqrt(depth) * rate
-        normal = np.where(touching, np.maximum(normal, 0.0), 0.0)                       # (2, k) [N]
-        anchors_mm = object_position_mm + self.anchor_mm @ object_rotation.T            # world (2, k, 3)
-        elastic = np.einsum("fkd,fcd->fkc", anchors_mm - tips_mm, self.frames[:, :2])   # (2, k, 2) sensor plane
-        twist = angle[:, None] - self.anchor_angle
-        response = bump_response(normal, elastic, twist, self.friction, p)
-        # slip: move the anchors so that the elastic part is the one carrying the limit load
-        slid = response.sliding
-        if np.any(slid):
-            target_mm = tips_mm + np.einsum("fkc,fcd->fkd", response.limit_displacement, self.frames[:, :2])
-            moved = (target_mm - object_position_mm) @ object_rotation
-            moved[..., 1] = self.anchor_mm[..., 1]
-            self.anchor_mm[slid] = moved[slid]
-            self.anchor_angle[slid] = (angle[:, None] - response.limit_twist)[slid]
-        elastic = response.limit_displacement
-        stiffness, _ = full_stick_stiffness(normal, p)
-        damping = p.damping_time * stiffness[..., None] * (elastic - self.previous_elastic_mm) / self.period
-        self.previous_elastic_mm = elastic
-        tangential = response.tangential_force + np.where(slid[..., None] | ~touching[..., None], 0.0, damping)
-        # forces on the object (world, N): bump pushes along z_s, resists the shear (-Q), torque -T about z_s
-        force = (normal[..., None] * self.frames[:, None, 2, :]
-                 - np.einsum("fkc,fcd->fkd", tangential, self.frames[:, :2]))           # (2, k, 3)
-        torque_nmm = -response.torque[..., None] * self.frames[:, None, 2, :]           # (2, k, 3)
-        lever = (tips_mm - data.xipos[self.object_id] * MM_PER_M).reshape(-1, 3)       # (2k, 3) [mm]
-        flat = force.reshape(-1, 3)
-        moment_nmm = np.array([lever[:, 1] @ flat[:, 2] - lever[:, 2] @ flat[:, 1],
-                               lever[:, 2] @ flat[:, 0] - lever[:, 0] @ flat[:, 2],
-                               lever[:, 0] @ flat[:, 1] - lever[:, 1] @ flat[:, 0]]) + torque_nmm.sum(axis=(0, 1))
-        data.xfrc_applied[self.object_id, :3] = force.sum(axis=(0, 1))
-        data.xfrc_applied[self.object_id, 3:] = moment_nmm / MM_PER_M
-        for f, body in enumerate(self.finger_ids):
-            data.xfrc_applied[body, :3] = -force[f].sum(axis=0)
-        self.normal_force, self.contact_radius = normal, response.contact_radius
-        self.shear_displacement, self.sliding = elastic, slid
-        self.tangential_force = response.tangential_force
-        self.grip_force_n = float(normal.sum(axis=1).mean())
+    def run(self, model, data, commands: np.ndarray, lift_targets: np.ndarray) -> None:
+        """``len(commands)`` physics steps (contact step, then ``mj_step``) with grasp-force commands [N] and lift
+        targets [m] per step, in compiled code."""
+        K.run_block(commands, lift_targets, self.config, self.geometry, self.state, self.bumps, self.out, data.xpos,
+                    data.xmat, data.xipos, data.qvel, data.xfrc_applied, data.mocap_pos, data.ctrl, model._address,
+                    data._address, mujoco_step_function())
+
+    def _field(self, column) -> np.ndarray:
+        return self.out[:, column].reshape(2, self.count)
+
+    @property
+    def normal_force(self) -> np.ndarray:
+        """Per-bump normal force (2, k) [N], mean over the last step's sub-steps."""
+        return self._field(K.O_NORMAL)
+
+    @property
+    def contact_radius(self) -> np.ndarray:
+        """Per-bump contact radius (2, k) [mm]."""
+        return self._field(K.O_RADIUS)
+
+    @property
+    def shear_displacement(self) -> np.ndarray:
+        """Per-bump elastic shear displacement (2, k, 2) [mm] in the sensor frame."""
+        return self.out[:, [K.O_ELASTIC_X, K.O_ELASTIC_Y]].reshape(2, self.count, 2)
+
+    @property
+    def tangential_force(self) -> np.ndarray:
+        """Per-bump tangential force (2, k, 2) [N] of the bump law (without the viscous term)."""
+        return self.out[:, [K.O_TANGENTIAL_X, K.O_TANGENTIAL_Y]].reshape(2, self.count, 2)
+
+    @property
+    def sliding(self) -> np.ndarray:
+        """Bumps on their combined friction limit (2, k) bool."""
+        return self._field(K.O_SLIDING) > 0.0
+
+    @property
+    def grip_force_n(self) -> float:
+        """Normal force per finger [N], mean of the two fingers over the last step."""
+        return float(self.state[K.S_GRIP_FORCE])
+
+    @property
+    def peak_force_n(self) -> float:
+        """Largest normal force of one finger over every sub-step so far [N]."""
+        return float(self.state[K.S_PEAK_FORCE])
+
+    @property
+    def closing_m(self) -> float:
+        """Closing of each finger from its start [m]."""
+        return float(self.state[K.S_CLOSING])
+
+
+@functools.lru_cache(maxsize=1)
+def mujoco_step_function():
+    """MuJoCo's ``mj_step`` as a ctypes function of (mjModel*, mjData*), for the compiled loop (``_kernel.run_block``).
+
+    The same shared library the ``mujoco`` bindings loaded (their ``libmujoco.so``), so both step one mjData.
+    """
+    import ctypes
+
+    import mujoco
+
+    folder = Path(mujoco.__file__).parent
+    candidates = sorted(folder.glob("libmujoco.so*")) + sorted(folder.glob("libmujoco*.dylib")) + \
+        sorted(folder.glob("mujoco*.dll"))
+    if not candidates:
+        raise RuntimeError(f"MuJoCo's shared library was not found in {folder}; the compiled loop needs it")
+    function = ctypes.CDLL(str(candidates[0])).mj_step
+    function.argtypes = [ctypes.c_void_p, ctypes.c_void_p]
+    function.restype = None
+    return function

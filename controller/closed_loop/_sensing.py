@@ -1,40 +1,88 @@
-"""Sensing chain of the closed loop: reduced model -> base pressure -> sensor -> estimator, and its bench."""
+"""Sensing chain of the closed loop: reduced model -> base pressure -> sensor -> estimator, and its bench.
+
+Every frame (100 Hz) each fingertip's bump states become sensor readings (the reduced model's base pressure on the
+paper's 11 x 13 node array, with noise) and the estimator turns the readings into per-bump forces and CoP shifts
+against the unsheared reference at each bump's force. From these the frame carries
+
+* the paper's estimate (eq. 9): the rigid transform of the calibrated shear displacements u_i = g s_i, whose
+  translation u_x and rotation theta drive the displacement-target law (``GraspForceController``);
+
+The bench (noise-free, like the FEM bench of Fig. 9) works on the reduced model without any object: the reference
+CoPs against the bump force, the scalar CoP gain and the displacement-law targets. Its fingertip
+states do not depend on the trial and are kept per fingertip design; only the estimator's noise gate changes with a
+trial's noise level.
+"""
 
 from __future__ import annotations
 
+import functools
+import json
 import math
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from contact.reduced import ReducedFingertip
+from contact.reduced import ReducedFingertip, bump_response
 from controller.calibration import EstimatorCalibration, calibrate_gain
 from controller.estimator import BumpLayout, BumpReference, EstimatorSettings, bump_positions, estimate_slip
 from controller.references import GraspPhase, ReferenceGenerator, ReferenceParameters
-from controller.sensor import PressureField, SensorArray, cell_force_operator, sample
+from controller.sensor import PressureField, SensorArray, cell_force_operator
 
-from ._bridge import ContactBridge
+from . import _sensing_kernel as S
 from ._trial import GRID_SPACING, TargetDesign
+
+BENCH_FRICTION = 1.0                   # -, friction of the bench states (their load ratios are read off them)
+
+
+@dataclass(frozen=True, eq=False)
+class SensorFrame:
+    """What the estimator reports for both fingertips (index 0 left, 1 right) at one sensor frame.
+
+    bump_force (2, k) [N]; in_contact (2, k) bool; cop_shift (2, k, 2) [mm] against the unsheared reference;
+    translation (2, 2) [mm] and rotation (2,) [rad] of the eq. 9 fit of u_i = g s_i; fitted (2,) bool (two bumps or
+    more).
+    """
+
+    bump_force: np.ndarray
+    in_contact: np.ndarray
+    cop_shift: np.ndarray
+    translation: np.ndarray
+    rotation: np.ndarray
+    fitted: np.ndarray
+
+    @property
+    def shear_displacement(self) -> float:
+        """u_x [mm] the displacement-target law sees: the larger |translation| of the two fingertips."""
+        return float(max(np.hypot(*self.translation[f]) for f in range(2) if self.fitted[f])) \
+            if self.fitted.any() else 0.0
+
+    @property
+    def twist_angle(self) -> float:
+        """theta [rad] the displacement-target law sees: the larger |rotation| of the two fingertips."""
+        return float(np.abs(self.rotation[self.fitted]).max()) if self.fitted.any() else 0.0
+
+    @property
+    def contact_count(self) -> int:
+        """Bumps in contact on the fingertip that sees more of them."""
+        return int(self.in_contact.sum(axis=1).max())
 
 
 class SensingChain:
     """Reduced model -> base pressure -> sensor (noise) -> estimator for both fingertips (100 Hz), and its bench.
 
-    The bench (noise-free, like the FEM bench of Fig. 9) calibrates the CoP gain on small shifts and sets the
-    controller's targets: u_x,ref is what the chain reports when every bump carries Q_i / (mu_low P_i) =
-    ``design.load_ratio``, theta_ref when the array carries ``design.torque_ratio`` of its slip torque, at the
-    reference force, for the lowest friction expected (``design.friction``). How each target scales with the force
-    (``ReferenceParameters`` force exponents) is read off the bench too: a signal that follows the shear displacement
-    grows like F^(2/3) at a fixed load ratio, one dominated by the overturning moment h Q / P stays constant
-    (exponent 0, a fixed target; negative growths are clipped to 0). The
-    controller's inversion exponents (its loop gain) are matched to the chain's measured slopes through the slip
-    factors.
+    The displacement-law targets (``design_references``): u_x,ref is what the chain reports when every bump carries
+    Q_i / (mu_low P_i) = ``design.load_ratio``, theta_ref when the array carries ``design.torque_ratio`` of its slip
+    torque, at the reference force, for the lowest friction expected (``design.friction_coefficient``); how each target scales
+    with the force and the loop-gain slip factors are read off the bench too (a signal that follows the shear
+    displacement grows like F^(2/3) at a fixed load ratio, one dominated by the overturning moment h Q / P stays
+    constant: exponent 0).
     """
 
     REFERENCE_FORCE = 5.0              # N, bench force for calibration and targets (mid-range of the holds)
 
-    def __init__(self, tip: ReducedFingertip, noise: float = 0.0, rng=None, design: TargetDesign = TargetDesign()):
-        self.tip, self.rng, self.design = tip, rng, design
+    def __init__(self, tip: ReducedFingertip, noise: float = 0.0, rng=None, design: TargetDesign | None = None):
+        self.tip, self.rng = tip, rng
+        self.design = TargetDesign() if design is None else design
         self.grid = tip.base_grid(GRID_SPACING)
         self.array = SensorArray(noise_std=noise)
         self.layout = BumpLayout.grid((tip.design.cols, tip.design.rows), tip.design.pitch)
@@ -42,68 +90,59 @@ class SensingChain:
         # at low force (a biased magnitude the controller regulates instead of the shear); the gate in turn biases
         # the CoP of a bump's rim in a force-dependent way, which the bench below sees as well
         self.settings = EstimatorSettings(contact_threshold=max(0.02, 10.0 * noise), node_floor=3.0 * noise)
-        self.operator = _operator(tip, self.array)
+        self._operator, self._region = _geometry(tip, self.array, self.layout)
+        node = self.array.node_positions.reshape(-1, 2)
+        self._node_x, self._node_y = node[:, 0].copy(), node[:, 1].copy()
+        self._centres = self.layout.centre_array
+        p, grid = tip.parameters, self.grid
+        self._model = np.array([p.kernel_spread, p.cop_gain, p.moment_arm, tip.max_kernel_shift, self.array.offset,
+                                self.array.quantization_step, self.settings.node_floor,
+                                self.settings.contact_threshold])
+        self._grid = np.array([grid.x[0], grid.y[0], grid.spacing, len(grid.x), len(grid.y)])
+        self._bench = _bench_states(tip)
         self.reference_table = self._reference_table()
         self.calibration = self._calibrate()
 
-    def _readings(self, bump_force, radius, shear, tangential, noisy=True):
-        pressure = self.tip.base_pressure(self.grid, bump_force, radius, shear, tangential)
-        field = PressureField.from_grid(self.grid.x, self.grid.y, pressure)
-        array = self.array if noisy else replace(self.array, noise_std=0.0)
-        return sample(field, array, self.rng if noisy else None, self.operator)[0]
+    # --- readings ---------------------------------------------------------------------------------------------
+    def readings(self, bump_force, radius, shear, tangential, noisy: bool = True) -> np.ndarray:
+        """Sensor readings (ny, nx) [N] of one fingertip's bump states (k,) / (k, 2) (noise unless ``noisy``)."""
+        count = len(self._centres)
+        centre_x, centre_y, width = np.empty(count), np.empty(count), np.empty(count)
+        bump_force = np.ascontiguousarray(bump_force, dtype=float)
+        S.kernel_geometry(bump_force, np.ascontiguousarray(radius, dtype=float),
+                          np.ascontiguousarray(shear, dtype=float), np.ascontiguousarray(tangential, dtype=float),
+                          self.tip.centres, *self._model[:4], centre_x, centre_y, width)
+        flat = np.empty(self.array.shape[0] * self.array.shape[1])
+        S.kernel_readings(flat, *self._grid[:3], int(self._grid[3]), int(self._grid[4]), centre_x, centre_y, width,
+                          bump_force, *self._operator)
+        flat += self.array.offset
+        if noisy and self.array.noise_std > 0.0:
+            flat += self.rng.normal(0.0, self.array.noise_std, flat.shape)
+        if self.array.quantization_step > 0.0:
+            flat = np.round(flat / self.array.quantization_step) * self.array.quantization_step
+        return flat.reshape(self.array.shape)
 
-    def _bench(self, states):
-        """Noise-free readings (t, ny, nx) of reduced-model states and the estimate against the first one."""
-        frames = np.stack([self._readings(s.normal_force, s.contact_radius, s.shear_displacement,
-                                          s.bump_tangential_force, False) for s in states])
-        reference = BumpReference.from_readings(frames[:1], self.array, self.layout, self.settings)
-        return estimate_slip(frames, self.array, self.layout, reference,
-                             getattr(self, "calibration", EstimatorCalibration()), self.settings)
+    def _state_readings(self, states) -> np.ndarray:
+        """Noise-free readings (t, ny, nx) of bench states (dicts of per-bump arrays)."""
+        return np.stack([self.readings(s["normal_force"], s["contact_radius"], s["shear_displacement"],
+                                       s["tangential_force"], noisy=False) for s in states])
 
-    def _calibrate(self) -> EstimatorCalibration:
-        """CoP gain on small rigid shifts (0, 0.01, 0.02 mm along x, nearly full stick) at the bench force."""
-        shifts = (0.0, 0.01, 0.02)
-        states = [self.tip.displacement_state(self.REFERENCE_FORCE, (shift, 0.0), 0.0, 1.0) for shift in shifts]
-        estimate = self._bench(states)
-        truth = np.zeros_like(estimate.cop_shift)
-        truth[:, :, 0] = np.asarray(shifts)[:, None]
-        return calibrate_gain(estimate.cop_shift[1:], truth[1:])
+    # --- one frame --------------------------------------------------------------------------------------------
+    def sense(self, bridge) -> SensorFrame:
+        """The estimator's view of both fingertips at the bridge's current state (one sensor frame)."""
+        count = len(self._centres)
+        noise = self.rng.normal(0.0, self.array.noise_std, (2, self._node_x.size)) if self.array.noise_std > 0.0 \
+            else np.zeros((2, self._node_x.size))
+        force, shift, fit = np.empty((2, count)), np.empty((2, count, 2)), np.empty((2, 4))
+        table_force, table_cop = self.reference_table
+        S.sense_frame(bridge.normal_force, bridge.contact_radius, bridge.shear_displacement, bridge.tangential_force,
+                      noise, self._model, self._grid, *self._operator, self._region, self._node_x, self._node_y,
+                      self._centres, table_force, table_cop, self.calibration.gain, force, shift, fit)
+        fitted = fit[:, 0] >= 2
+        return SensorFrame(force, force > self.settings.contact_threshold, shift, fit[:, 2:],
+                           np.where(fitted, fit[:, 1], 0.0), fitted)
 
-    def _design_signal(self, force, load_ratio, torque_ratio):
-        """(|t|, |theta|) the chain reports at a load ratio (x) or torque ratio (slip torque share) at force P."""
-        friction = self.design.friction
-        bump_force = np.full(len(self.tip.centres), force / len(self.tip.centres))
-        radius = self.tip.parameters.radius_coefficient * np.cbrt(bump_force)
-        slip_torque = self.tip.slip_margin(bump_force, radius, friction, (0.0, 0.0), 1.0)[0]
-        state = self.tip.load_state(force, (load_ratio * friction * force, 0.0), torque_ratio * slip_torque, friction)
-        estimate = self._bench([self.tip.displacement_state(force, (0.0, 0.0), 0.0, friction), state])
-        return (float(np.linalg.norm(estimate.transform.translation[1])), abs(float(estimate.transform.rotation[1])))
-
-    def design_references(self) -> ReferenceParameters:
-        """Targets, force scaling and slip factors from the bench (class docstring)."""
-        force, x, y, step = self.REFERENCE_FORCE, self.design.load_ratio, self.design.torque_ratio, 0.01
-        u_ref = self._design_signal(force, x, 0.0)[0]
-        theta_ref = self._design_signal(force, 0.0, y)[1]
-        # how the signals grow with the force at the design ratios (a hemisphere: u ~ F^(2/3), theta ~ F^(1/3); the
-        # array's twist signal ~ F^(2/3) too, its bumps translate; a load-ratio signal, as the FEM-calibrated CoP,
-        # does not grow: exponent 0, a fixed target), each channel scaled with its own exponent
-        growth = (math.log(self._design_signal(4.0 * force, x, 0.0)[0] / u_ref) / math.log(4.0),
-                  math.log(self._design_signal(4.0 * force, 0.0, y)[1] / theta_ref) / math.log(4.0))
-        references = ReferenceParameters(u_ref, theta_ref, force, scale_with_force=True,
-                                         translational_force_exponent=min(max(growth[0], 0.0), 2.0),
-                                         rotational_force_exponent=min(max(growth[1], 0.0), 2.0))
-        # |u| / u_ref(F) ~ F^(-e) at a constant load: e from a +-1 % force change at the design load
-        span = math.log((1 + step) / (1 - step))
-        ratios = []
-        for channel, (load, torque) in enumerate(((x, 0.0), (0.0, y))):
-            generator = ReferenceGenerator(references)
-            values = [self._design_signal(force * scale, load / scale, torque / scale)[channel]
-                      / generator.references(GraspPhase.HOLD, force * scale)[channel] for scale in (1 - step, 1 + step)]
-            ratios.append(math.log(values[0] / values[1]) / span)
-        p_x, p_theta = references.inversion_exponents                  # full-stick law of a single hemisphere
-        return replace(references, translational_slip_factor=max(p_x * ratios[0], 1.0),
-                       rotational_slip_factor=max(p_theta * ratios[1], 1.0))
-
+    # --- bench ------------------------------------------------------------------------------------------------
     def _reference_table(self):
         """Unsheared bench CoPs per bump against the bump's measured force: (forces (n,) [N], cop (n, k, 2) [mm]).
 
@@ -112,48 +151,137 @@ class SensingChain:
         every later change of grip force into a spurious shear. The bench tabulates it (a sensor calibration of the
         design, not of the object), and ``sense`` interpolates each bump's reference at its own measured force.
         """
-        totals = np.geomspace(0.1, 60.0, 40)                                              # N per fingertip
-        states = [self.tip.displacement_state(total, (0.0, 0.0), 0.0, 1.0) for total in totals]
-        frames = np.stack([self._readings(s.normal_force, s.contact_radius, s.shear_displacement,
-                                          s.bump_tangential_force, False) for s in states])
+        frames = self._state_readings(self._bench["unsheared"])
         force, cop, _ = bump_positions(frames, self.array, self.layout, self.settings)     # (n, k), (n, k, 2)
         seen = force.min(axis=1) > 0.0                                                     # every bump above the gate
-        return force[seen].mean(axis=1), cop[seen]
+        return np.ascontiguousarray(force[seen].mean(axis=1)), np.ascontiguousarray(cop[seen])
 
-    def _reference_at(self, bump_force):
-        """BumpReference interpolated at the measured bump forces (k,) [N] (log-force, clamped at the ends)."""
-        forces, cop = self.reference_table
-        position = np.interp(np.log(np.maximum(bump_force, forces[0])), np.log(forces), np.arange(len(forces)))
-        lower = np.minimum(position.astype(int), len(forces) - 2)
-        weight = (position - lower)[:, None]
-        index = np.arange(len(bump_force))
-        reference = (1.0 - weight) * cop[lower, index] + weight * cop[lower + 1, index]      # (k, 2)
-        return BumpReference(reference, reference.copy(), bump_force > self.settings.contact_threshold)
+    def _estimate(self, states):
+        """Noise-free estimate of bench states against the first one (the paper's estimator, ``estimate_slip``)."""
+        frames = self._state_readings(states)
+        reference = BumpReference.from_readings(frames[:1], self.array, self.layout, self.settings)
+        return estimate_slip(frames, self.array, self.layout, reference,
+                             getattr(self, "calibration", EstimatorCalibration()), self.settings)
 
-    def sense(self, bridge: ContactBridge):
-        """(u_x [mm], theta [rad], contact_count) seen by the controller: the larger of the two fingertips."""
-        u_x, theta, count = 0.0, 0.0, 0
-        for f in range(2):
-            readings = self._readings(bridge.normal_force[f], bridge.contact_radius[f], bridge.shear_displacement[f],
-                                      bridge.tangential_force[f])
-            bump_force = bump_positions(readings, self.array, self.layout, self.settings)[0][0]
-            estimate = estimate_slip(readings, self.array, self.layout, self._reference_at(bump_force),
-                                     self.calibration, self.settings)
-            count = max(count, int(estimate.in_contact[0].sum()))
-            if estimate.transform.valid[0]:
-                u_x = max(u_x, float(np.linalg.norm(estimate.transform.translation[0])))
-                theta = max(theta, abs(float(estimate.transform.rotation[0])))
-        return u_x, theta, count
+    def _calibrate(self) -> EstimatorCalibration:
+        """CoP gain on small rigid shifts (0, 0.01, 0.02 mm along x, nearly full stick) at the bench force."""
+        estimate = self._estimate(self._bench["small_shifts"])
+        truth = np.zeros_like(estimate.cop_shift)
+        truth[:, :, 0] = np.asarray(SMALL_SHIFTS)[:, None]
+        return calibrate_gain(estimate.cop_shift[1:], truth[1:])
+
+    def _design_signal(self, state_pair):
+        """(|t|, |theta|) the chain reports for a (reference, loaded) pair of bench states."""
+        estimate = self._estimate(state_pair)
+        return (float(np.linalg.norm(estimate.transform.translation[1])), abs(float(estimate.transform.rotation[1])))
+
+    def design_references(self) -> ReferenceParameters:
+        """Targets, force scaling and slip factors of the displacement-target law from the bench (class docstring)."""
+        design, force, step = self.design, self.REFERENCE_FORCE, DESIGN_STEP
+        pairs = _design_states(self.tip, design.friction_coefficient, design.load_ratio, design.torque_ratio, force)
+        u_ref = self._design_signal(pairs["translation", 1.0])[0]
+        theta_ref = self._design_signal(pairs["twist", 1.0])[1]
+        growth = (math.log(self._design_signal(pairs["translation", 4.0])[0] / u_ref) / math.log(4.0),
+                  math.log(self._design_signal(pairs["twist", 4.0])[1] / theta_ref) / math.log(4.0))
+        references = ReferenceParameters(u_ref, theta_ref, force, scale_with_force=True,
+                                         translational_force_exponent=min(max(growth[0], 0.0), 2.0),
+                                         rotational_force_exponent=min(max(growth[1], 0.0), 2.0))
+        # |u| / u_ref(F) ~ F^(-e) at a constant load: e from a +-1 % force change at the design load
+        span = math.log((1 + step) / (1 - step))
+        ratios = []
+        generator = ReferenceGenerator(references)
+        for channel, kind in enumerate(("translation_at_constant_load", "twist_at_constant_load")):
+            values = [self._design_signal(pairs[kind, scale])[channel]
+                      / generator.references(GraspPhase.HOLD, force * scale)[channel] for scale in (1 - step, 1 + step)]
+            ratios.append(math.log(values[0] / values[1]) / span)
+        p_x, p_theta = references.inversion_exponents                  # full-stick law of a single hemisphere
+        return replace(references, translational_slip_factor=max(p_x * ratios[0], 1.0),
+                       rotational_slip_factor=max(p_theta * ratios[1], 1.0))
 
 
-_OPERATORS = {}
+SMALL_SHIFTS = (0.0, 0.01, 0.02)        # mm along x at the bench force: the scalar CoP gain
+DESIGN_STEP = 0.01                      # +-1 % force change for the displacement law's slip factors
 
 
-def _operator(tip: ReducedFingertip, array: SensorArray):
-    """Cell-force operator of the reduced model's base grid (cached per design, parameters and array geometry)."""
-    key = (repr(tip.to_dict()), array.pitch, array.node_counts, array.centre)
-    if key not in _OPERATORS:
+def _tip_key(tip: ReducedFingertip) -> str:
+    return json.dumps(tip.to_dict(), sort_keys=True)
+
+
+_GEOMETRY: dict = {}
+
+
+def _geometry(tip: ReducedFingertip, array: SensorArray, layout: BumpLayout):
+    """Cell-force operator of the base grid in CSC form (indptr, indices, weights) and the bump of each sensor node
+    (n_nodes,) int, cached per design, parameters and array geometry (not noise)."""
+    key = (_tip_key(tip), array.pitch, array.node_counts, array.centre, layout)
+    if key not in _GEOMETRY:
         grid = tip.base_grid(GRID_SPACING)
         field = PressureField.from_grid(grid.x, grid.y, np.zeros((len(grid.y), len(grid.x))))
-        _OPERATORS[key] = cell_force_operator(field.positions, field.triangles, array)
-    return _OPERATORS[key]
+        operator = cell_force_operator(field.positions, field.triangles, array).tocsc()
+        operator.sort_indices()
+        regions = layout.regions(array).reshape(len(layout.centres), -1)                  # (k, n_nodes)
+        region = np.where(regions.any(axis=0), np.argmax(regions, axis=0), -1)
+        _GEOMETRY[key] = ((operator.indptr.astype(np.int64), operator.indices.astype(np.int64), operator.data),
+                          region.astype(np.int64))
+    return _GEOMETRY[key]
+
+
+def _displacement_states(tip: ReducedFingertip, total_force: float, translations, rotations) -> list[dict]:
+    """Bench states of a rigid object displacement (translation (n, 2) [mm], rotation (n,) [rad]) at a total
+    normal force [N] shared equally by the bumps (a flat object, no tilt), on a surface of BENCH_FRICTION."""
+    translations, rotations = np.atleast_2d(translations), np.atleast_1d(rotations)
+    bump_force = np.full((len(rotations), len(tip.centres)), total_force / len(tip.centres))
+    shear = tip.bump_shear(translations, rotations)
+    response = bump_response(bump_force, shear, np.broadcast_to(rotations[:, None], bump_force.shape),
+                             BENCH_FRICTION, tip.parameters)
+    return [dict(normal_force=bump_force[n], contact_radius=response.contact_radius[n],
+                 shear_displacement=response.limit_displacement[n], tangential_force=response.tangential_force[n])
+            for n in range(len(rotations))]
+
+
+_BENCH: dict = {}
+
+
+def _bench_states(tip: ReducedFingertip) -> dict:
+    """Noise-free bench states of a fingertip design (cached): 'unsheared' at 40 forces (the reference table) and
+    'small_shifts' (the scalar gain)."""
+    key = _tip_key(tip)
+    if key not in _BENCH:
+        unsheared = [_displacement_states(tip, total, (0.0, 0.0), 0.0)[0] for total in np.geomspace(0.1, 60.0, 40)]
+        small = _displacement_states(tip, SensingChain.REFERENCE_FORCE, [(shift, 0.0) for shift in SMALL_SHIFTS],
+                                     np.zeros(len(SMALL_SHIFTS)))
+        _BENCH[key] = dict(unsheared=unsheared, small_shifts=small)
+    return _BENCH[key]
+
+
+@functools.lru_cache(maxsize=16)
+def _cached_design_states(key: str, friction: float, load_ratio: float, torque_ratio: float, force: float):
+    tip = ReducedFingertip.from_dict(json.loads(key))
+    count = len(tip.centres)
+
+    def pair(total, load, torque):
+        bump_force = np.full(count, total / count)
+        radius = tip.parameters.radius_coefficient * np.cbrt(bump_force)
+        slip_torque = tip.slip_margin(bump_force, radius, friction, (0.0, 0.0), 1.0)[0]
+        loaded = tip.load_state(total, (load * friction * total, 0.0), torque * slip_torque, friction)
+        rest = tip.displacement_state(total, (0.0, 0.0), 0.0, friction)
+        return [_as_bench(rest), _as_bench(loaded)]
+
+    pairs = {("translation", 1.0): pair(force, load_ratio, 0.0), ("twist", 1.0): pair(force, 0.0, torque_ratio),
+             ("translation", 4.0): pair(4.0 * force, load_ratio, 0.0), ("twist", 4.0): pair(4.0 * force, 0.0,
+                                                                                           torque_ratio)}
+    for scale in (1 - DESIGN_STEP, 1 + DESIGN_STEP):
+        pairs["translation_at_constant_load", scale] = pair(force * scale, load_ratio / scale, 0.0)
+        pairs["twist_at_constant_load", scale] = pair(force * scale, 0.0, torque_ratio / scale)
+    return pairs
+
+
+def _design_states(tip: ReducedFingertip, friction, load_ratio, torque_ratio, force) -> dict:
+    """Bench state pairs (unloaded, loaded) of the displacement-law design (``SensingChain.design_references``),
+    cached per design: they need the array's slip limit and a Newton solve each."""
+    return _cached_design_states(_tip_key(tip), float(friction), float(load_ratio), float(torque_ratio), float(force))
+
+
+def _as_bench(state) -> dict:
+    return dict(normal_force=state.normal_force, contact_radius=state.contact_radius,
+                shear_displacement=state.shear_displacement, tangential_force=state.bump_tangential_force)

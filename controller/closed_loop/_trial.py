@@ -10,16 +10,15 @@ import numpy as np
 
 from contact.reduced import ReducedFingertip
 from controller.acceleration_control import AccelerationControlParameters
-from fem.validation import check_range
+from fem.validation import check_positive, check_range
 
 GRAVITY = 9.81                      # m/s^2
 MM_PER_M = 1000.0
-PHYSICS_RATE_HZ = 8000.0            # MuJoCo step = acceleration-control rate (paper: 8 kHz)
-# reduced-model contact update (explicit): omega dt <= 0.35 and damping c dt / m <= 0.9 must hold at the stiffest
-# contact. At 2 kHz the light eclair between two FEM-calibrated fingertips (k_n 14 % above Hertz) broke the first
-# above ~2 N per bump: it rattled between the fingers, one losing contact each step, and turned out (the two Table I
-# failures of an earlier run); 4 kHz and 8 kHz give the same trial to 0.1 mrad and 0.01 N.
-CONTACT_RATE_HZ = 4000.0
+# MuJoCo step and contact update [Hz]. The contact is coupled implicitly (``_kernel``): an explicit update needed
+# omega dt <= 0.35 and c dt / m <= 0.9 at the stiffest contact (4 kHz for the light eclair between two calibrated
+# fingertips; at 2 kHz it rattled between the fingers and turned out).
+PHYSICS_RATE_HZ = 1000.0
+ACTUATOR_RATE_HZ = 8000.0           # Acceleration Control + DOB, sub-stepped in the contact kernel (paper: 8 kHz)
 DESIGN_FRICTION = 0.4               # lowest friction the controller targets are designed for (mu range 0.4-1.0)
 APPROACH_GAP_M = 0.001              # initial gap between each bump tip and the object face
 LIFT_HEIGHT_M = 0.05
@@ -57,6 +56,19 @@ class GraspObject:
     grasp_height: float
     crush_force: float = math.inf
 
+    def __post_init__(self):
+        if not isinstance(self.name, str) or not self.name:
+            raise ValueError(f"object name={self.name!r} must be a non-empty string")
+        check_positive(f"{self.name}.mass", self.mass, "kg")
+        if len(self.size) != 3:
+            raise ValueError(f"{self.name}.size={self.size!r} must be three lengths (x, y, z) [m]")
+        for axis, length in zip("xyz", self.size):
+            check_positive(f"{self.name}.size.{axis}", length, "m")
+        check_range(f"{self.name}.lever", self.lever, -0.5 * self.size[0], 0.5 * self.size[0], "m (within the box)")
+        check_range(f"{self.name}.grasp_height", self.grasp_height, 0.0, self.size[2], "m (on the box)", True, True)
+        if self.crush_force != math.inf:                       # inf: the object cannot be crushed
+            check_positive(f"{self.name}.crush_force", self.crush_force, "N")
+
     @property
     def moment_nm(self) -> float:
         return self.mass * GRAVITY * self.lever
@@ -78,15 +90,15 @@ TABLE_I_OBJECTS = {
 class TargetDesign:
     """What the controller's targets are designed for: the lowest friction expected and the load ratios
     Q / (mu P) and T / T_slip at which the bench sets u_x,ref and theta_ref. At a friction mu in full stick the
-    controller then holds about mu / (friction load_ratio) times the least force (the displacement hardly depends
+    controller then holds about mu / (friction_coefficient load_ratio) times the least force (the displacement hardly depends
     on mu below gross slip), which is its safety factor against an unknown surface."""
 
-    friction: float = DESIGN_FRICTION
+    friction_coefficient: float = DESIGN_FRICTION
     load_ratio: float = 0.6
     torque_ratio: float = 0.6
 
     def __post_init__(self):
-        check_range("targets.friction", self.friction, 0.0, math.inf, low_open=True, high_open=True)
+        check_range("targets.friction_coefficient", self.friction_coefficient, 0.0, math.inf, low_open=True, high_open=True)
         check_range("targets.load_ratio", self.load_ratio, 0.0, 1.0, low_open=True, high_open=True)
         check_range("targets.torque_ratio", self.torque_ratio, 0.0, 1.0, low_open=True, high_open=True)
 
@@ -95,10 +107,12 @@ class TargetDesign:
 class TrialSettings:
     """One trial: friction fingertip-object, grasp-position jitter (along x, z) [m], object yaw misalignment [rad]
     (the bumps touch one after the other), sensor noise [N per node], constant_force [N] (None: the grasp
-    controller; a number: that force throughout, for tau_min), phase durations [s], seed, and what the
-    controller's targets are designed for (TargetDesign)."""
+    controller; a number: that force throughout, for tau_min), phase durations [s], seed, what the
+    controller's targets are designed for (TargetDesign), the MuJoCo / contact rate and the actuator-loop rate [Hz]
+    (an integer multiple of it), and whether the contact is coupled implicitly (False: explicitly, for
+    comparison)."""
 
-    friction: float = 0.8
+    friction_coefficient: float = 0.8
     grasp_offset: tuple[float, float] = (0.0, 0.0)
     misalignment: float = 0.0
     sensor_noise: float = 0.001
@@ -108,6 +122,32 @@ class TrialSettings:
     place: bool = True
     seed: int = 0
     targets: TargetDesign = TargetDesign()
+    physics_rate_hz: float = PHYSICS_RATE_HZ
+    actuator_rate_hz: float = ACTUATOR_RATE_HZ
+    implicit_coupling: bool = True
+
+    def __post_init__(self):
+        check_positive("friction_coefficient", self.friction_coefficient)
+        if len(self.grasp_offset) != 2:
+            raise ValueError(f"grasp_offset={self.grasp_offset!r} must be (along x, in height) [m]")
+        for name, value in zip(("grasp_offset.x", "grasp_offset.z"), self.grasp_offset):
+            check_range(name, value, -0.05, 0.05, "m")
+        check_range("misalignment", self.misalignment, -0.5, 0.5, "rad")
+        check_range("sensor_noise", self.sensor_noise, 0.0, 1.0, "N")
+        if self.constant_force is not None:
+            check_positive("constant_force", self.constant_force, "N")
+        check_range("hold_time", self.hold_time, 0.0, 600.0, "s")
+        for name in ("rotational_slip_detection", "place", "implicit_coupling"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"{name}={getattr(self, name)!r} must be True or False")
+        if not isinstance(self.targets, TargetDesign):
+            raise ValueError(f"targets={self.targets!r} must be a TargetDesign")
+        check_positive("physics_rate_hz", self.physics_rate_hz, "Hz")
+        check_positive("actuator_rate_hz", self.actuator_rate_hz, "Hz")
+        substeps = self.actuator_rate_hz / self.physics_rate_hz
+        if substeps < 1.0 or abs(substeps - round(substeps)) > 1e-9 * substeps:
+            raise ValueError(f"actuator_rate_hz={self.actuator_rate_hz!r} must be an integer multiple (>= 1) of "
+                             f"physics_rate_hz={self.physics_rate_hz!r}")
 
 
 @dataclass
@@ -146,14 +186,21 @@ class TrialResult:
         """Simulated seconds per wall-clock second (> 1: faster than real time)."""
         return self.simulated_time / self.wall_time
 
+    def trace_frame(self):
+        """The 100 Hz trace as a pandas DataFrame, one row per sensor frame (columns as ``trace``; SI and mm)."""
+        import pandas as pd
+
+        return pd.DataFrame(self.trace)
 
 
-def required_grip_force(obj: GraspObject, friction: float, tip: ReducedFingertip = None) -> float:
+
+def required_grip_force(obj: GraspObject, friction_coefficient: float, tip: ReducedFingertip | None = None) -> float:
     """Least normal force per finger [N] that carries the object (reduced model's slip limit, two fingers sharing
     the weight m g / 2 [N] and the moment m g lever / 2 [N mm] about the fingertip normal)."""
     tip = default_tip() if tip is None else tip
     weight_n = obj.mass * GRAVITY
-    return tip.minimum_normal_force((0.0, 0.5 * weight_n), 0.5 * weight_n * obj.lever * MM_PER_M, friction)
+    return tip.minimum_normal_force((0.0, 0.5 * weight_n), 0.5 * weight_n * obj.lever * MM_PER_M,
+                                    friction_coefficient)
 
 
 
@@ -161,7 +208,7 @@ def random_settings(rng, **fixed) -> TrialSettings:
     """Randomised trial (Table I): mu in [0.4, 1.0], grasp jitter +-5 mm along x and +-1 mm in height (the 30 mm
     eclair leaves 1.7 mm between the outer bump rows and its edges; a row off the face flickers in and out), yaw
     misalignment +-1 deg, sensor noise 0.5-2 mN per node; ``fixed`` overrides."""
-    values = dict(friction=float(rng.uniform(0.4, 1.0)),
+    values = dict(friction_coefficient=float(rng.uniform(0.4, 1.0)),
                   grasp_offset=(float(rng.uniform(-0.005, 0.005)), float(rng.uniform(-0.001, 0.001))),
                   misalignment=float(np.radians(rng.uniform(-1.0, 1.0))),
                   sensor_noise=float(rng.uniform(0.0005, 0.002)), seed=int(rng.integers(2**31)))
