@@ -5,7 +5,7 @@ BumpLayout) -> GraspForceController (1 kHz) -> AccelerationController with DOB (
 MuJoCo stepping at 8 kHz. Sequence: approach, grasp on the table, lift, hold (4 s), place, release. The controller
 gets no object data (mass, moment, friction).
 
-How the contact is enforced. MuJoCo's friction is soft (a held object creeps, DESIGN.md), so the fingers and the
+How the contact is enforced. MuJoCo's friction is soft (objects creep, docs/design.md, sec. 11), so the fingers and the
 object do not collide in MuJoCo (contype/conaffinity 0 on the fingers): every bump tip is a contact of the reduced
 model, evaluated at 4 kHz (CONTACT_RATE_HZ) and applied to the object (and, reversed, to the finger) through ``xfrc_applied``:
 
