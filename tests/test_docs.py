@@ -101,7 +101,7 @@ def test_the_checker_finds_a_missing_section_a_missing_file_and_a_missing_anchor
     # built at run time so that the scan of this file does not see them
     prefix = "docs/"
     assert broken_citations(prefix + "theory.md, sec. 4.4 and " + prefix + "design.md, secs. 5.1 and 7") == []
-    assert len(broken_citations(prefix + "theory.md, secs. 4.4, 99 and 6.3")) == 1
+    assert len(broken_citations(prefix + "theory.md, secs. 4.4, " + "99 and 6.3")) == 1
     assert len(broken_citations(prefix + "nothing.md, sec. 1")) == 2                 # citation and file
     assert len(broken_citations(prefix + "theory.md#no-such-heading")) == 1
     assert broken_citations(prefix + "theory.md#11-fem-tolerances-and-why") == []
