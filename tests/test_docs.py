@@ -9,7 +9,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 # notes that existed only outside the repository (split so that this file does not name them itself)
-FORBIDDEN = ("THEORY" ".md", "DESIGN" ".md", "/work/" "shared")
+FORBIDDEN = ("THEORY" + ".md", "DESIGN" + ".md", "/work/" + "shared")
 TEXT_SUFFIXES = {".py", ".md", ".ipynb", ".toml", ".txt", ".cfg", ".ini", ".yml", ".yaml", ".json", ".html", ""}
 SKIP_DIRS = {".git", ".venv", "venv", "__pycache__", "results", "build", "dist", ".pytest_cache", ".hypothesis"}
 
