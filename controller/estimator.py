@@ -292,7 +292,7 @@ def translational_stick_ratio(shear_displacement, normal_force, friction_coeffic
 def rotational_stick_ratio(rotation, normal_force, friction_coefficient, contact_radius, shear_modulus) -> np.ndarray:
     """Stick ratio c/a [-] from the rotational shear displacement theta [rad] (exact replacement of eq. 8).
 
-    Lubkin's twist theta(c) = mu P / (G a^2) f(c/a) (THEORY.md sec. 3.2), so c/a depends only on the normalised
+    Lubkin's twist theta(c) = mu P / (G a^2) f(c/a) (docs/theory.md, sec. 6.3), so c/a depends only on the normalised
     twist theta G a^2 / (mu P); ``contact.theory.stick_ratio_from_rotation`` is evaluated at P = mu = a = G = 1 with
     it, which vectorises over arrays of P, a (it takes scalar P, a). |theta| is used (the sign is the direction).
     P [N], a [mm] and G [MPa] must be > 0; a is the radius of the single contact the paper's model assumes.

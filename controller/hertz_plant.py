@@ -3,7 +3,7 @@
 The single-hemisphere plant the grasp controller is tested against without MuJoCo (contact.reduced models the 3x3
 array fingertip of the closed loop and shares its Lubkin table).
 
-Model (contact.theory, THEORY.md secs. 3.2 and 4), rigid object on an elastic hemisphere (R, E, nu):
+Model (contact.theory, docs/theory.md, secs. 4.4 and 6.3), rigid object on an elastic hemisphere (R, E, nu):
     contact radius  a(P) from Hertz with E* = E / (1 - nu^2),
     shear displacement u_x = Mindlin shift: 3 mu P (2 - nu) / (16 G a) [1 - (1 - Q/(mu P))^(2/3)]  [mm],
     twist angle theta = Lubkin twist at torque T                                                  [rad],

@@ -3,8 +3,8 @@
 Why the reference may scale with the grasp force. For a power-law fingertip C r^n (Hertz: n = 2) the contact radius
 is a ~ F_N^(1/(n+1)) (paper eq. 10). At a fixed load ratio the displacements at which a contact slips grow with F_N:
 
-    translational (Cattaneo-Mindlin, THEORY.md sec. 1):  u_x = mu (E*/G*) [d(a) - d(c)],  d ~ a^n ~ F_N^(n/(n+1))
-    rotational (Lubkin, THEORY.md sec. 3.2, Hertz):  theta = (mu F_N / (G a^2)) f(T / (mu F_N a)) ~ F_N^((n-1)/(n+1))
+    translational (Cattaneo-Mindlin, docs/theory.md, sec. 4.4): u_x = mu (E*/G*) [d(a) - d(c)],  d ~ a^n ~ F_N^(n/(n+1))
+    rotational (Lubkin, Hertz, docs/theory.md, sec. 6.3): theta = (mu F_N/(G a^2)) f(T/(mu F_N a)) ~ F_N^((n-1)/(n+1))
 
 so a reference u_ref(F) = u_ref0 (F / F_0)^q with q = n/(n+1) (translation) and q = (n-1)/(n+1) (twist in rad)
 keeps Q/(mu F_N) and T/(mu F_N a) at the values they have at u_ref0 and F_0, i.e. a constant stick ratio and a grasp

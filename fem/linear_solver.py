@@ -96,7 +96,7 @@ class _Factorization:
 class SpdFactorization(_Factorization):
     """Factorization of a sparse SPD matrix; ``solve(B)`` takes (n,) or (n, k) right-hand sides.
 
-    'pardiso' is MKL PARDISO in SPD mode (13 s vs 140 s for scipy's splu on 94k DOF, DESIGN.md);
+    'pardiso' is MKL PARDISO in SPD mode (13 s vs 140 s for scipy's splu on 94k DOF, docs/design.md, sec. 11);
     'splu' is SuperLU from scipy, the fallback where MKL has no wheel.
     """
 

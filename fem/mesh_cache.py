@@ -1,8 +1,8 @@
 """On-disk cache of tetrahedral meshes (npz of nodes p and tets t), keyed by a hash of everything that made them.
 
-A sweep must never re-mesh the same geometry (DESIGN.md): the key hashes the geometry, the mesh parameters and the
-mesher versions, and files are written atomically (temporary file in the same folder, then ``os.replace``), so an
-interrupted run leaves either the old file or the new one, never half of one.
+A sweep must never re-mesh the same geometry (docs/design.md, sec. 11): the key hashes the geometry, the mesh parameters
+and the mesher versions, and files are written atomically (temporary file in the same folder, then ``os.replace``),
+so an interrupted run leaves either the old file or the new one, never half of one.
 """
 
 from __future__ import annotations

@@ -7,7 +7,7 @@ import numpy as np
 from contact.scene import BodySpec, ContactSpec, GelSpec, Load, LoadKind, Material, MeshSettings, Scene
 
 MU = 0.5
-NU = 0.45            # urethane-like gel; beta/mu = 0.18 and the press is frictionless (THEORY.md sec. 5)
+NU = 0.45            # urethane-like gel; beta/mu = 0.18 and the press is frictionless (docs/theory.md, sec. 8.3)
 E = 1.0              # MPa; stick ratios do not depend on E
 
 

@@ -24,7 +24,7 @@ THEORY_ROUND_OFF = 1e-6       # closed form vs quadrature of the same theory: an
 class Claim:
     """What a study reproduces and how its verdict is decided.
 
-    source : str -- where the claim comes from (paper figure/section, or DESIGN.md)
+    source : str -- where the claim comes from (paper figure/section, or docs/design.md)
     claim : str -- the claim, in the source's terms
     measure : str -- what the study measures against what, and the rule in words
     rule : callable (summary: dict, rows: list[dict]) -> (verdict, why) -- rows are the study's CSV (floats parsed)
@@ -77,7 +77,7 @@ def _rule_fig3b(summary, rows):
     for row in rows:
         if row["load_ratio"] < 1.0:
             drops[row["b_over_a"]] = row["stick_ratio"]            # rows ascend in load: the last one before slip
-    # THEORY.md sec. 6: the drop height at Q = mu P equals b/a
+    # docs/theory.md, sec. 5.3: the drop height at Q = mu P equals b/a
     sudden = bool(drops) and all(height >= b_over_a - 0.01 for b_over_a, height in drops.items())
     return _grade([checked, sudden]), (
         f"{why}; just before Q = mu P, c/a = {', '.join(f'{h:.2f}' for h in drops.values())} for b/a = "
@@ -91,7 +91,7 @@ def _rule_torsion(summary, rows):
     worst = max(paper, key=lambda r: abs(r["gap_vs_lubkin"]), default=None)
     if worst is None:
         return NOT_REPRODUCED, f"{why}; no rows of the paper's model in torsion-theory.csv"
-    close = abs(worst["gap_vs_lubkin"]) <= 0.05               # THEORY.md sec. 6: c/a tolerance of an FEM check
+    close = abs(worst["gap_vs_lubkin"]) <= 0.05               # docs/theory.md, sec. 11.1: c/a tolerance of an FEM check
     exact_at_slip = next((r["stick_ratio_lubkin"] for r in paper if r["torque_ratio"] == r["full_slip_torque_ratio"]),
                          math.nan)
     return (REPRODUCED if checked and close else PARTLY if checked else NOT_REPRODUCED), (
@@ -102,7 +102,7 @@ def _rule_torsion(summary, rows):
 
 
 def _fem_tolerance(rows, radius_key: str) -> float:
-    """THEORY.md sec. 6: stick/slip is decided per node, so c/a is known to +-0.5 h/a (0.05 at h = a/10)."""
+    """docs/theory.md, sec. 11.1: stick/slip is decided per node, so c/a is known to +-0.5 h/a (0.05 at h = a/10)."""
     return max(0.5 * r["element_size"] / r[radius_key] for r in rows)
 
 
@@ -228,8 +228,8 @@ def _rule_convergence(summary, rows):
     error = summary.get("max_error")
     verdict = (REPRODUCED if error is not None and error <= TARGET_STICK_RATIO_ERROR else
                PARTLY if error is not None and error <= 0.05 else NOT_REPRODUCED)
-    return verdict, (f"{_number(error)} on the finest P1 mesh (target {TARGET_STICK_RATIO_ERROR}, THEORY.md's "
-                     f"+-0.05 at h = a/10 for 'partly')")
+    return verdict, (f"{_number(error)} on the finest P1 mesh (target {TARGET_STICK_RATIO_ERROR}; "
+                     f"docs/theory.md, sec. 11.1: +-0.05 at h = a/10 for 'partly')")
 
 
 CLAIMS: dict[str, Claim] = {
@@ -257,7 +257,7 @@ CLAIMS: dict[str, Claim] = {
         "paper Fig. 3 (ANSYS check, sec. IV-A)",
         "the stick ratio drops suddenly when the flat surface ratio b/a is large (FEM confirms the theory)",
         "FEM rigid plate on flat + curved gel caps against Ciavarella-Jager at the FEM's own b/a, Q/(mu P) <= 0.9; "
-        "tolerance +-0.5 h/a (THEORY.md sec. 6)", _rule_fig3),
+        "tolerance +-0.5 h/a (docs/theory.md, sec. 11.1)", _rule_fig3),
     "fig4": Claim(
         "paper Fig. 4 (ANSYS, sec. IV-A)",
         "the stick ratio changes slowly for the curved surface contact, while it drops suddenly for the flat "
@@ -301,7 +301,7 @@ CLAIMS: dict[str, Claim] = {
         "MuJoCo closed loop: success rate per object (10 trials default, 1 quick), randomised mu, grasp position and "
         "sensor noise", _rule_table1),
     "convergence": Claim(
-        "DESIGN.md, HCM-1 benchmark",
+        "docs/design.md, sec. 8 (HCM-1 benchmark)",
         "the FEM stick ratio on HCM-1 follows Cattaneo-Mindlin to within 0.02 on a fine mesh",
         "largest |c/a FEM - Cattaneo-Mindlin| on the finest P1 mesh, Q/(mu P) = 0.2 ... 0.9", _rule_convergence,
         "Not a paper claim: the solver's own accuracy, as error against wall time."),

@@ -4,7 +4,7 @@ load ratio near gross slip, load size, mesh grading), and each result compared w
 should follow.
 
 Every case starts from ``BASE`` (sphere R = 10 mm on a 20 x 20 x 10 mm block, E = 1 MPa, nu = 0.45, mu = 0.5,
-P = 0.2 N, frictionless press: no Spence pre-slip, so Cattaneo-Mindlin and Lubkin apply, THEORY.md sec. 5).
+P = 0.2 N, frictionless press: no Spence pre-slip, so Cattaneo-Mindlin and Lubkin apply, docs/theory.md, sec. 8.3).
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ NORMAL_FORCE = 0.2          # N; Hertz a = 1.062 mm at E = 1 MPa, nu = 0.45, R =
 QUICK_SIZE_CONTACT = 0.3    # mm (CI size, about a/3.5)
 SHEAR_STEP = 0.5            # a shear path to Q/(mu P) > 0.5 goes through 0.5 first
 TWIST_STEP = 0.3            # a twist path to T/(mu P a) > 0.3 goes through 0.3 first
-STEEP_LOAD_RATIO = 0.9      # beyond this c/a(Q) is steep: compare the load ratio implied by c/a (THEORY.md sec. 6.3)
+STEEP_LOAD_RATIO = 0.9      # c/a(Q) is steep beyond: compare the load ratio c/a implies (docs/theory.md, sec. 11.3)
 STEEP_TORQUE_RATIO = 0.5
 
 
@@ -126,8 +126,8 @@ def _inverse_tolerance(curve, stick_ratio: float, delta: float) -> float:
 
 def compare_with_theory(case: StabilityCase, document: dict, force: float, result) -> dict:
     """Columns quantity, fem, theory, error, tolerance of the case's last increment, and the press's contact radius
-    against Hertz. Stick ratios are measured with the FEM's own a (THEORY.md sec. 6.2); the tolerance is the
-    node-wise stick/slip classification, +-0.5 h/a in c/a (sec. 6.1), carried through the curve where it is steep."""
+    against Hertz. Stick ratios are measured with the FEM's own a (docs/theory.md, sec. 11.2); the tolerance is the
+    node-wise stick/slip classification, +-0.5 h/a in c/a (sec. 11.1), carried through the curve where it is steep."""
     from contact.theory import stick_ratio_torsion, stick_ratio_translational, torsion_torque_ratio
 
     press, last = result.increments[0], result.increments[-1]

@@ -64,7 +64,7 @@ def run(out_dir, quick: bool = False) -> dict:
                              dofs=result.mesh_info["dofs"], seconds=seconds))
         write_csv_atomic(out_dir / f"{NAME}.csv", rows)            # keep what is done if a later shape fails
     wall = time.perf_counter() - start
-    # THEORY.md sec. 6: near gross slip dc/dQ is steep and a flat face makes it a jump; compare up to 0.9
+    # docs/theory.md, sec. 11.3: near gross slip dc/dQ is steep and a flat face makes it a jump; compare up to 0.9
     max_error = max(abs(r["error"]) for r in rows if r["load_ratio"] <= 0.9)
     save_figure(_plot(rows, surface_ratios, max_error, size, wall), out_dir, NAME)
     return {"max_error": max_error,

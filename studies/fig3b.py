@@ -1,6 +1,6 @@
 """Fig. 3b: stick ratio c/a against Q/(mu P) for the flat + curved cap, surface ratio b/a = 0, 0.25, 0.5, 0.75, 0.9.
 
-Ciavarella-Jager, P(c) = P(a)(1 - Q/(mu P)), for the two readings of THEORY.md sec. 2: the rounded flat punch
+Ciavarella-Jager, P(c) = P(a)(1 - Q/(mu P)), for the two readings of docs/theory.md, sec. 5.2: the rounded flat punch
 (plotted, closed-form P(a)) and the flat + parabolic 1D MDR profile (dashed, extra CSV column). c/a falls
 to b/a and drops to 0 at Q = mu P. Independent check: the same stick ratios with P(rho) from MDR quadrature
 of each reading's 3D gap f(r) instead of the closed-form force curves.

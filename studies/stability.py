@@ -2,7 +2,7 @@
 load size, meshes.
 
 Each case (studies/_stability_cases.py) either converges, and its error against Cattaneo-Mindlin / Lubkin / Hertz
-is reported with the tolerance of THEORY.md sec. 6, or raises a clear error that is recorded with its message.
+is reported with the tolerance of docs/theory.md, sec. 11, or raises a clear error that is recorded with its message.
 A NaN or an unexpected outcome is marked in the ``verdict`` column. Writes stability.csv, stability.png/.pdf.
 """
 
@@ -104,7 +104,7 @@ def _plot(rows: list[dict]):
     axis_error.legend(fontsize=7, loc="upper left")
     for axis in (axis_error, axis_radius):
         axis.grid(True, axis="y", alpha=0.3)
-    fig.suptitle("Solver stability: error against theory / tolerance (THEORY.md sec. 6) per case; 'error': the case "
-                 "raised (message in stability.csv)")
+    fig.suptitle("Solver stability: error against theory / tolerance (docs/theory.md, sec. 11) per case; "
+                 "'error': the case raised (message in stability.csv)")
     fig.tight_layout()
     return fig

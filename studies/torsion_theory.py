@@ -1,7 +1,7 @@
 """Torsion theory: the paper's model (eq. 6 corrected and as printed) against the exact Hertz solution (Lubkin).
 
 Stick ratio c/a against torque ratio T/(mu P a) at constant normal force. The paper's 1D spring model slides
-as a whole at T = 3/8 mu P a, the exact 3D contact at 3 pi/16 mu P a (THEORY.md sec. 3). Second panel: the
+as a whole at T = 3/8 mu P a, the exact 3D contact at 3 pi/16 mu P a (docs/theory.md, sec. 6). Second panel: the
 paper's c/a minus the exact one, at equal torque and at equal fraction of each model's own full-slip torque.
 Independent check: Lubkin's T(c) formula against the superposition of rigid-disc rotations,
 T = (4 pi/3) int_c^a t^3 w(t) dt with w(t) = (2 mu p0/pi) E(k_t)/t, by QUADPACK.

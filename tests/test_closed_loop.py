@@ -40,7 +40,7 @@ def test_light_object_is_lifted_and_held_without_creep():
     assert result.success and not result.dropped
     assert result.hold_force_mean > required_grip_force(box, 0.8)
     # stick is enforced (anchored bumps): the held object drifts only with the grip-force ripple,
-    # far below MuJoCo's own soft friction (50-155 um/s with elliptic cones, DESIGN.md)
+    # far below MuJoCo's own soft friction (50-155 um/s with elliptic cones, docs/design.md, sec. 11)
     assert result.creep_um_per_s < 5.0
     assert max(result.trace["object_height_m"]) > 0.04                      # it went up with the gripper
 

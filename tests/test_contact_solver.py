@@ -30,8 +30,8 @@ def half_space(nu):
 
 @pytest.fixture(scope="module")
 def shear_result():
-    # nu = 0.3 with friction switched on after the press: THEORY.md sec. 5 shows this removes the Spence pre-slip and
-    # leaves c/a within 0.005 of Cattaneo-Mindlin, so the test sees the discretisation error alone.
+    # nu = 0.3 with friction switched on after the press: docs/theory.md, sec. 8.3 shows this removes the Spence
+    # pre-slip and leaves c/a within 0.005 of Cattaneo-Mindlin, so the test sees the discretisation error alone.
     loads = (Load(LoadKind.PRESS, "force", (FORCE,)),
              Load(LoadKind.SHEAR, "force", tuple(r * MU * FORCE for r in SHEAR_RATIOS)))
     return solve_scene(scene(0.3, loads))
@@ -82,10 +82,10 @@ def test_contact_radius_and_depth_follow_hertz(shear_result):
     nu = 0.3
     reference = half_space(nu)
     press = shear_result.increments[0]
-    # a is known to +-h/2 (the edge lies between a contact and an open point, THEORY.md sec. 6)
+    # a is known to +-h/2 (the edge lies between a contact and an open point, docs/theory.md, sec. 11.1)
     assert press.contact_radius == pytest.approx(float(reference.contact_radius), abs=H / 2)
     # The fixed base 20 mm down removes the half-space settlement there, P (3 - 2 nu) / (4 pi G z) (Boussinesq);
-    # what remains must match Hertz to the 3 % of THEORY.md sec. 6.
+    # what remains must match Hertz to the 3 % of docs/theory.md, sec. 11.8.
     shear_modulus = E / (2 * (1 + nu))
     settlement = FORCE * (3 - 2 * nu) / (4 * math.pi * shear_modulus * 20.0)
     assert press.depth == pytest.approx(float(reference.indentation) - settlement, rel=0.03)
@@ -94,7 +94,7 @@ def test_contact_radius_and_depth_follow_hertz(shear_result):
 def test_stick_ratio_follows_cattaneo_mindlin(shear_result):
     for ratio, inc in zip(SHEAR_RATIOS, shear_result.increments[1:]):
         expected = float(stick_ratio_translational(ratio, 2))
-        # stick and contact edges are each known to +-h/2; c/a uses the FEM's own a (THEORY.md sec. 6)
+        # stick and contact edges are each known to +-h/2; c/a uses the FEM's own a (docs/theory.md, sec. 11.2)
         assert inc.stick_ratio == pytest.approx(expected, abs=0.5 * H / inc.contact_radius)
 
 
@@ -102,13 +102,13 @@ def test_tangential_shift_follows_mindlin(shear_result):
     nu = 0.3
     for ratio, inc in zip(SHEAR_RATIOS, shear_result.increments[1:]):
         expected = float(mindlin_shift(ratio * MU * FORCE, FORCE, MU, inc.contact_radius, E / (2 * (1 + nu)), nu))
-        assert inc.shift[0] == pytest.approx(expected, rel=0.05)    # THEORY.md sec. 6: delta(Q) to 5 %
+        assert inc.shift[0] == pytest.approx(expected, rel=0.05)    # docs/theory.md, sec. 11.8: delta(Q) to 5 %
 
 
 def test_stick_ratio_under_twist_follows_lubkin(twist_result):
     torques = twist_result.scene.loads[1].values
     for expected, torque, inc in zip(TWIST_STICK, torques, twist_result.increments[1:]):
-        # torsion is uncoupled from the normal problem (THEORY.md 3.2); edge quantisation +-h/2 as above
+        # torsion is uncoupled from the normal problem (docs/theory.md, sec. 6.3); edge quantisation +-h/2 as above
         assert inc.stick_ratio == pytest.approx(expected, abs=0.5 * H / inc.contact_radius)
         assert inc.torque == pytest.approx(torque, rel=1e-8)      # the torque target is met to Newton's tolerance
 
@@ -150,7 +150,7 @@ def test_non_converged_increment_keeps_earlier_results(failing_after_press):
 def test_hcm1_as_written_follows_cattaneo_mindlin(load_ratio, hcm1_result):
     inc = hcm1_result.increments[1 + [0.2, 0.4, 0.6, 0.8, 0.9].index(load_ratio)]
     expected = float(stick_ratio_translational(load_ratio, 2))
-    # h = 0.1 mm = a/10: +-0.05 (THEORY.md sec. 6), plus up to 0.012 of Spence pre-slip at nu = 0.45 (sec. 5)
+    # h = 0.1 mm = a/10: +-0.05 (docs/theory.md, sec. 11.1), plus up to 0.012 of Spence pre-slip at nu = 0.45 (sec. 8.3)
     assert inc.stick_ratio == pytest.approx(expected, abs=0.05 + 0.012)
 
 

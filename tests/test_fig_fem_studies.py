@@ -25,7 +25,7 @@ def test_fig3_quick_follows_ciavarella_jager(tmp_path):
     assert {"case", "load_ratio", "stick_ratio_fem", "stick_ratio_theory", "error"} <= set(rows[0])
     for row in rows:
         assert float(row["error"]) == pytest.approx(float(row["stick_ratio_fem"]) - float(row["stick_ratio_theory"]))
-    # quick mesh h = a/5: the stick and contact edges are each known to +-h/2 (THEORY.md sec. 6), so c/a to
+    # quick mesh h = a/5: the stick and contact edges are each known to +-h/2 (docs/theory.md, sec. 11.1), so c/a to
     # +-(h/2a)(1 + c/a) <= h/a = 0.2; checked up to Q/(mu P) = 0.9 (fTetWild meshes differ from run to run)
     assert summary["max_error"] < QUICK_H_OVER_A
     # the flat face keeps the stick zone: at Q/(mu P) = 0.9 more stays stuck the larger b/a is
@@ -61,6 +61,6 @@ def plate_on_cap(size_contact):
 def test_cap_contact_radius_converges_toward_hertz():
     reference = float(hertz(0.2, 10.0, 1.0 / (1 - 0.3**2)).contact_radius)
     errors = [abs(solve_scene(plate_on_cap(h)).increments[0].contact_radius - reference) for h in (0.6, 0.3, 0.15)]
-    # the error falls with h and ends within h/2 (edge quantisation) plus 3 % (finite cap and base, THEORY.md 6.4)
+    # the error falls with h to within h/2 (edge quantisation) plus 3 % (finite cap and base, docs/theory.md, sec. 11.4)
     assert errors[2] < errors[0]
     assert errors[2] < 0.15 / 2 + 0.03 * reference

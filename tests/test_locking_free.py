@@ -164,7 +164,7 @@ def test_saddle_point_needs_a_positive_pressure_compliance(incompressible_cube):
 
 
 # nearly incompressible contact: the stability study's block (20 x 20 x 10 mm), sphere R = 10 mm, P = 0.2 N,
-# friction switched on after the press (no Spence pre-slip; beta ~ 0.001 at nu = 0.499, THEORY.md sec. 5)
+# friction switched on after the press (no Spence pre-slip; beta ~ 0.001 at nu = 0.499, docs/theory.md, sec. 8)
 RADIUS, FORCE, MU, NU_CONTACT = 10.0, 0.2, 0.5, 0.499
 H = 0.3                                  # mm, a/3.5: the smallest mesh on which standard P1 misses c/a beyond +-h/2
 SHEAR_RATIOS = (0.5, 0.8)

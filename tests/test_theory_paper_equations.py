@@ -81,7 +81,7 @@ def test_eq14_inverts_eq13_and_exact_rotation_has_the_full_stick_stiffness():
     assert T == pytest.approx(2.0 / 3.0 * G_STAR * u_paper * A**2, rel=ROUND_OFF)     # eq. 13
     u_exact = shear_displacement_rotational_exact(T, P, MU, A, G)
     assert u_exact == pytest.approx(3.0 * T / (16.0 * G * A**2), rel=1e-5)            # O(T/T_slip) partial slip
-    # the paper's stiffness is 1/(2(2 - nu)) of the exact one (THEORY.md sec. 3.1)
+    # the paper's stiffness is 1/(2(2 - nu)) of the exact one (docs/theory.md, sec. 6.2)
     assert u_exact / u_paper == pytest.approx(1.0 / (2.0 * (2.0 - NU)), rel=1e-5)
 
 

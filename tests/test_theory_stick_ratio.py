@@ -60,7 +60,7 @@ def test_flat_curved_quadrature_matches_closed_form_force_curve(reading):
 
 
 def test_mdr_1d_reading_sticks_more_than_rounded_punch():
-    # THEORY.md sec. 2: the second reading is 0.003-0.03 higher in c/a, same end point
+    # docs/theory.md, sec. 5.2: the second reading is 0.003-0.03 higher in c/a, same end point
     load_ratios = np.linspace(0.05, 0.95, 10)
     for b_over_a in (0.25, 0.5, 0.75):
         gap = (stick_ratio_profile(load_ratios, flat_curved(b_over_a, reading="mdr_1d"))

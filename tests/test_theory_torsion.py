@@ -54,7 +54,7 @@ def test_torsion_end_points(model, n):
 def test_full_slip_torques():
     assert full_slip_torque_ratio("paper", 2) == 0.375
     assert full_slip_torque_ratio("lubkin") == 3 * math.pi / 16 == LUBKIN_SLIP_TORQUE_RATIO
-    # THEORY.md 3.1: the 1D model's full-slip torque is 2/pi of the exact one for every profile
+    # docs/theory.md, sec. 6.2: the 1D model's full-slip torque is 2/pi of the exact one for every profile
     ratio = full_slip_torque_ratio("paper", 2) / full_slip_torque_ratio("lubkin")
     assert ratio == pytest.approx(2 / math.pi, rel=1e-15)
 
@@ -76,7 +76,10 @@ def test_lubkin_full_stick_stiffness():
 
 
 def _w(t, c):
-    """Superposition density w(t) = (2 mu p0/pi) E(k_t)/t, k_t = sqrt(1 - t^2/a^2), for c < t < a (THEORY.md 3.2)."""
+    """Superposition density w(t) = (2 mu p0/pi) E(k_t)/t, k_t = sqrt(1 - t^2/a^2), for c < t < a.
+
+    docs/theory.md, sec. 6.3.
+    """
     p0 = 3.0 * P / (2.0 * math.pi * A**2)
     return 2.0 * MU * p0 / math.pi * ellipe(1.0 - (t / A) ** 2) / t
 

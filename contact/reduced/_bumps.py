@@ -6,8 +6,8 @@ Combined load on one bump. A bump under a tangential force Q and a torque T abou
 (Q, T) reaches its limit surface; for a circular Hertz contact the limit surface is close to the ellipse
 (Q / (mu P))^2 + (T / T_slip)^2 = 1 with T_slip = (3 pi / 16) mu P a (Howe and Cutkosky 1996, "Practical
 force-motion models for sliding manipulation", IJRR 15: the ellipsoid fits the exact limit surface of a circular
-patch within a few per cent). Each mode follows its own partial-slip law (Mindlin, Lubkin, THEORY.md secs. 3-4,
-exact each on its own) up to the flow point of the ellipse, the point whose normal is along
+patch within a few per cent). Each mode follows its own partial-slip law (Mindlin, Lubkin, docs/theory.md,
+secs. 4.4 and 6.3, exact each on its own) up to the flow point of the ellipse, the point whose normal is along
 (mu P |delta|, T_slip |phi|): the loads of maximum dissipation for slip increments parallel to the displacement and
 twist (for a monotonic load from rest, the rigid sliding twist). Each share is capped at its flow-point value, so
 the law is continuous, reduces to Mindlin alone and Lubkin alone, and a bump that slides in both (sliding) carries

@@ -1,7 +1,7 @@
 """Closed-form contact theory: Hertz, MDR / Cattaneo-Mindlin, Ciavarella-Jager, Lubkin torsion, the paper's equations.
 
 Units: mm, N, MPa, N mm, rad. Every function accepts scalars or numpy arrays and raises ValueError naming
-the argument for invalid input. Formulas, sources and the paper's corrections: THEORY.md.
+the argument for invalid input. Formulas, sources and the paper's corrections: docs/theory.md.
 """
 
 from ._hertz import HertzContact, hertz, mindlin_shift

@@ -40,7 +40,7 @@ def hertz(P, R, E_star):
     Returns
     -------
     HertzContact
-        Johnson (1985) sec. 4.2; THEORY.md sec. 1 (MDR with n = 2, C_2 = 1/(2R)).
+        Johnson (1985) sec. 4.2; docs/theory.md, secs. 2 and 3.2 (MDR with n = 2, C_2 = 1/(2R)).
     """
     P = checked("P", P, 0.0, math.inf, "N")
     R = checked("R", R, 0.0, math.inf, "mm", low_open=True)
@@ -55,7 +55,7 @@ def mindlin_shift(Q, P, mu, a, G, nu):
     """Tangential shift [mm] of a rigid sphere on an elastic half-space under Q at constant P (partial slip).
 
     delta = 3 mu P (2 - nu) / (16 G a) [1 - (1 - Q/(mu P))^(2/3)]   (Mindlin 1949; Johnson 1985 sec. 7.2;
-    THEORY.md sec. 4). Initial stiffness dQ/d delta = 8 G a / (2 - nu); gross slip at Q = mu P.
+    docs/theory.md, sec. 4.4). Initial stiffness dQ/d delta = 8 G a / (2 - nu); gross slip at Q = mu P.
 
     Parameters
     ----------

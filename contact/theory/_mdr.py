@@ -1,6 +1,6 @@
 """Method of dimensionality reduction (MDR): scaling factor kappa_n, modified profile g(x) and force P(a) by quadrature.
 
-Popov & Hess, Method of Dimensionality Reduction in Contact Mechanics and Friction (2015); THEORY.md sec. 1.
+Popov & Hess, Method of Dimensionality Reduction in Contact Mechanics and Friction (2015); docs/theory.md, sec. 3.
 The quadrature routes here take any axisymmetric profile (an ``AxisymmetricProfile`` or anything with
 ``slope(r)`` and ``breakpoints``) and serve as the independent check of every closed form.
 """
@@ -41,7 +41,7 @@ def mdr_modified_profile(profile, x):
 
 
 def mdr_normal_force(profile, contact_radius, E_star=1.0):
-    """Frictionless normal force P(a) = 2 E* int_0^a (g(a) - g(x)) dx [N] by MDR quadrature (THEORY.md sec. 1).
+    """Frictionless normal force P(a) = 2 E* int_0^a (g(a) - g(x)) dx [N] by MDR quadrature (docs/theory.md, sec. 3.1).
 
     Parameters
     ----------

@@ -12,7 +12,7 @@ _POISSON = dict(low=-1.0, high=0.5, low_open=True)      # 0.5 (incompressible) i
 
 
 def effective_modulus(E1, nu1, E2=math.inf, nu2=0.0):
-    """Effective normal modulus E* [MPa]: 1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2 (THEORY.md header, paper eq. 1).
+    """Effective normal modulus E* [MPa]: 1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2 (docs/theory.md sec. 1.3, paper eq. 1).
 
     Parameters
     ----------
@@ -27,7 +27,7 @@ def effective_modulus(E1, nu1, E2=math.inf, nu2=0.0):
 
 
 def tangential_modulus(G1, nu1, G2=math.inf, nu2=0.0):
-    """MDR tangential modulus G* [MPa]: 1/G* = (2 - nu1)/(4 G1) + (2 - nu2)/(4 G2) (THEORY.md header).
+    """MDR tangential modulus G* [MPa]: 1/G* = (2 - nu1)/(4 G1) + (2 - nu2)/(4 G2) (docs/theory.md, sec. 1.3).
 
     Rigid body on one elastic body: G* = 4 G/(2 - nu). The paper uses G* without defining it; this is the
     value for which the 1D spring model reproduces the Cattaneo-Mindlin shift exactly.

@@ -2,7 +2,7 @@
 
 Units: forces [N], moduli [MPa], lengths and displacements [mm], torque [N mm], C_n [mm^(1-n)].
 u_x is the tangential shift of the fingertip, u_theta = a theta the rotational shear displacement at the
-contact edge. THEORY.md sec. 4 lists every finding; each function's docstring says what was corrected.
+contact edge. docs/theory.md, sec. 7 lists every finding; each function's docstring says what was corrected.
 """
 
 from __future__ import annotations
@@ -54,7 +54,7 @@ def shear_displacement_translational_exact(Q, P, mu, E_star, G_star, C_n, n=2):
     """Exact (MDR / Cattaneo-Mindlin) shear displacement u_x [mm] of a power-law contact under Q at constant P.
 
     u_x = mu (E*/G*) [d(a) - d(c)] = mu (E*/G*) d [1 - (1 - Q/(mu P))^(n/(n+1))], d = kappa_n C_n a^n
-    (THEORY.md secs. 1 and 4). For n = 2 this is Mindlin's 3 mu P/(4 G* a) [1 - (1 - Q/(mu P))^(2/3)].
+    (docs/theory.md, sec. 4.4). For n = 2 this is Mindlin's 3 mu P/(4 G* a) [1 - (1 - Q/(mu P))^(2/3)].
     """
     depth, mu, E_star, G_star, n, P = _indentation(P, mu, E_star, G_star, C_n, n)
     load_ratio = checked("Q/(mu P)", np.asarray(Q, dtype=float) / (mu * P), 0.0, 1.0)
@@ -66,7 +66,7 @@ def shear_displacement_rotational(T, P, E_star, G_star, C_n, n=2):
 
     Eq. 14 inverts eq. 13 correctly, but eq. 13, T = (2/3) G* a^2 u_theta, integrates a 1D spring row
     (int_-a^a ... r dr) for a 2D torque: its stiffness T/theta = (2/3) G* a^3 is 1/(2(2 - nu)) of the exact
-    16 G a^3/3 (25-33 %), and it has no partial slip (THEORY.md sec. 3.1). See
+    16 G a^3/3 (25-33 %), and it has no partial slip (docs/theory.md, sec. 6.2). See
     ``shear_displacement_rotational_exact``.
     """
     a = contact_radius_from_force(P, E_star, C_n, n)
@@ -78,7 +78,7 @@ def shear_displacement_rotational(T, P, E_star, G_star, C_n, n=2):
 def shear_displacement_rotational_exact(T, P, mu, a, G):
     """Exact rotational shear displacement u_theta = a theta [mm] of a Hertz contact under torque T [N mm].
 
-    theta from Lubkin's partial-slip solution (``lubkin_twist``, THEORY.md sec. 3.2); full-stick slope
+    theta from Lubkin's partial-slip solution (``lubkin_twist``, docs/theory.md, sec. 6.3); full-stick slope
     u_theta = 3 T / (16 G a^2). G is the shear modulus of the elastic body [MPa] (two bodies: 1/(1/G1 + 1/G2)).
     """
     return as_output(checked("a", a, 0.0, math.inf, "mm", low_open=True) * np.asarray(lubkin_twist(T, P, mu, a, G)))
@@ -87,7 +87,7 @@ def shear_displacement_rotational_exact(T, P, mu, a, G):
 def stick_ratio_from_shear_displacement(u_x, P, mu, E_star, G_star, C_n, n=2):
     """Stick ratio c/a [-] from the measured shear displacement u_x [mm]: exact replacement of paper eq. 7.
 
-    c/a = [1 - G* u_x / (mu E* d)]^(1/n), d = kappa_n C_n a^n the indentation depth (MDR, THEORY.md sec. 4);
+    c/a = [1 - G* u_x / (mu E* d)]^(1/n), d = kappa_n C_n a^n the indentation depth (MDR, docs/theory.md, sec. 4.4);
     Hertz: c/a = sqrt(1 - G* u_x/(mu E* d)). Displacements at or beyond the gross-slip value mu E* d / G*
     give 0 (the contact slides). Eq. 7 itself uses the linear law of eq. 11 in partial slip; see
     ``stick_ratio_from_shear_displacement_paper``.
@@ -105,7 +105,7 @@ def stick_ratio_from_shear_displacement_paper(u_x, P, mu, E_star, G_star, C_n, n
     "corrected": Psi = 2 G* a / (mu F_N) [1/mm] (eq. 3 combined with eq. 11: exponent 1/(n+1) on a and factor 2
     instead of pi). Both still assume the linear law of eq. 11 in partial slip, which underestimates the
     displacement (by 1.5x at gross slip) and so overestimates c/a for a given Q; feeding it an exact
-    displacement gives c/a too low (THEORY.md sec. 4).
+    displacement gives c/a too low (docs/theory.md, sec. 7.1).
     """
     check_choice("model", model, _PAPER_MODELS)
     P, E_star, C_n, n = _check_power_law(P, E_star, C_n, n)
@@ -120,7 +120,7 @@ def stick_ratio_from_shear_displacement_paper(u_x, P, mu, E_star, G_star, C_n, n
 def stick_ratio_from_rotation(u_theta, P, mu, a, G):
     """Stick ratio c/a [-] from the rotational shear displacement u_theta = a theta [mm]: exact replacement of eq. 8.
 
-    Inverts Lubkin's twist theta(c) = 3 mu P/(4 pi G a^2) [K(k') - E(k')] (THEORY.md sec. 3.2) for c by a
+    Inverts Lubkin's twist theta(c) = 3 mu P/(4 pi G a^2) [K(k') - E(k')] (docs/theory.md, sec. 6.3) for c by a
     bracketing root finder; theta(c) grows without bound as c -> 0, so every u_theta >= 0 has a c/a in (0, 1].
     """
     P = checked("P", P, 0.0, math.inf, "N", low_open=True)

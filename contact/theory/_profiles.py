@@ -2,7 +2,7 @@
 
 Every profile is a callable f(r) [mm] (initial gap between the flat counter-body and the fingertip at radius
 r [mm]) that also carries its slope f'(r), the radii where f' has a kink, and, where known, the closed-form
-MDR profile g(x) [mm] and the force-radius curve P(a)/E* [mm^2] (THEORY.md secs. 1 and 2).
+MDR profile g(x) [mm] and the force-radius curve P(a)/E* [mm^2] (docs/theory.md, secs. 3 and 5).
 """
 
 from __future__ import annotations
@@ -52,7 +52,7 @@ class AxisymmetricProfile:
 def power_law(n, coefficient=1.0):
     """Power-law profile f(r) = C r^n [mm] (paper Fig. 2a; n = 2, C = 1/(2R) is a sphere of radius R).
 
-    Closed forms (THEORY.md sec. 1): g(x) = kappa_n C x^n, P(a)/E* = 2n/(n+1) kappa_n C a^(n+1).
+    Closed forms (docs/theory.md, sec. 3.2): g(x) = kappa_n C x^n, P(a)/E* = 2n/(n+1) kappa_n C a^(n+1).
 
     Parameters
     ----------
@@ -75,7 +75,7 @@ def power_law(n, coefficient=1.0):
 def flat_curved(b_over_a, reading="rounded_punch", contact_radius=1.0, curvature_radius=1.0):
     """The paper's flat + curved cap (Fig. 3): flat for r < b = (b/a) a, curved beyond [mm].
 
-    Two readings (THEORY.md sec. 2; the paper does not say which it used). The stick ratio depends only on
+    Two readings (docs/theory.md, sec. 5.2; the paper does not say which it used). The stick ratio depends only on
     b/a, not on the curvature radius.
 
     * ``"rounded_punch"`` (default, the 3D reading): f = (r - b)^2 / (2 R) for r > b, 0 inside, so

@@ -17,7 +17,7 @@ __all__ = ["stick_ratio_translational", "stick_ratio_profile"]
 def stick_ratio_translational(load_ratio, n=2):
     """Stick ratio c/a = (1 - Q/(mu P))^(1/(n+1)) [-] for a power-law profile C r^n (paper eq. 3).
 
-    Exact in 3D for beta = 0 (THEORY.md sec. 1). ``n = inf`` is the flat-punch limit: c/a = 1 for every
+    Exact in 3D for beta = 0 (docs/theory.md, sec. 4.2). ``n = inf`` is the flat-punch limit: c/a = 1 for every
     load ratio below 1 and 0 at 1 (the whole contact slides at once).
 
     Parameters
@@ -36,7 +36,7 @@ def stick_ratio_profile(load_ratio, profile, contact_radius=1.0, method="quadrat
     """Stick ratio c/a [-] of any axisymmetric profile by Ciavarella-Jager: P(c) = P(a) (1 - Q/(mu P)).
 
     P(rho) is the frictionless force-radius curve from MDR, P(rho)/E* = 2 int_0^rho (g(rho) - g(x)) dx with
-    g(x) = x int_0^(pi/2) f'(x sin phi) dphi (THEORY.md secs. 1-2), solved for c in [flat_radius, a] by a
+    g(x) = x int_0^(pi/2) f'(x sin phi) dphi (docs/theory.md, secs. 3.1 and 5.1), solved for c in [flat_radius, a] by a
     bracketing root finder. At Q = mu P the whole contact slides and the result is 0 (for a profile with a
     flat face the stick ratio drops there from b/a to 0).
 

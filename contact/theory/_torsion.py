@@ -1,6 +1,6 @@
 """Partial-slip torsion of a circular contact: the paper's 1D model (eqs. 4-6) and the exact Hertz solution (Lubkin).
 
-Torque ratio t = T/(mu P a) [-], stick ratio k = c/a [-]. THEORY.md sec. 3: the paper's 1D spring model
+Torque ratio t = T/(mu P a) [-], stick ratio k = c/a [-]. docs/theory.md, sec. 6: the paper's 1D spring model
 reaches full slip at t = (n+1)/(2(n+2)) (3/8 for n = 2), the exact Hertz contact at t = 3 pi/16 (Lubkin 1951;
 Johnson 1985 sec. 7.4), and eq. 6 as printed gives (c/a)^2 instead of c/a.
 """
@@ -35,7 +35,7 @@ def torsion_torque_ratio(stick_ratio, model="lubkin", n=2):
     """Torque ratio T/(mu P a) [-] that gives the stick ratio c/a [-] in [0, 1] (the inverse of stick_ratio_torsion).
 
     * "lubkin": T(c) = (4 mu P a / pi) int_0^k' x sqrt(1 - x^2) E(x) dx, k' = sqrt(1 - c^2/a^2), E with modulus x
-      (THEORY.md sec. 3.2), by Gauss quadrature after x = sin(psi).
+      (docs/theory.md, sec. 6.3), by Gauss quadrature after x = sin(psi).
     * "paper": eq. 4, t = -(n+1)/(6n) k^2 - 2(n^2-1)/(6n(n+2)) k^(n+2) + (n+1)/(2(n+2)), valid for any n > 0.
     * "paper_as_printed": eq. 6 as printed inverted, k = sqrt(4 - 8t) - 1, so t = (4 - (k+1)^2)/8 (n = 2).
     """
@@ -53,7 +53,7 @@ def stick_ratio_torsion(torque_ratio, model="lubkin", n=2):
     ----------
     torque_ratio : float or array -- T/(mu P a) [-], in [0, 1].
     model : str
-        "lubkin" -- exact partial-slip torsion of a Hertz contact (n = 2 only), T(c) of THEORY.md sec. 3.2
+        "lubkin" -- exact partial-slip torsion of a Hertz contact (n = 2 only), T(c) of docs/theory.md, sec. 6.3
         inverted by a bracketing root finder; full slip at 3 pi/16 = 0.589.
         "paper" -- paper eq. 5 (eq. 4 solved for c/a; any n > 0, root finding); for n = 2 the closed form
         c/a = sqrt(sqrt(4 - 8t) - 1), i.e. eq. 6 corrected with the outer square root (eq. 6 as printed is
@@ -80,7 +80,7 @@ def lubkin_twist(torque, P, mu, a, G):
     """Twist angle theta [rad] of a rigid sphere on an elastic half-space under torque T [N mm], partial slip.
 
     theta(c) = 3 mu P / (4 pi G a^2) [K(k') - E(k')], k' = sqrt(1 - c^2/a^2), c from ``stick_ratio_torsion``
-    (THEORY.md sec. 3.2; Lubkin 1951, Deresiewicz 1954). Two elastic bodies: pass G = 1/(1/G1 + 1/G2).
+    (docs/theory.md, sec. 6.3; Lubkin 1951, Deresiewicz 1954). Two elastic bodies: pass G = 1/(1/G1 + 1/G2).
     Full stick limit theta = 3 T / (16 G a^3).
 
     Parameters

@@ -9,7 +9,7 @@ place, release. From Python::
     result = run_trial(TABLE_I_OBJECTS["eclair"], TrialSettings(friction_coefficient=0.5))
     result.trace_frame()                      # pandas DataFrame of the 100 Hz trace
 
-How the contact is enforced. MuJoCo's friction is soft (a held object creeps, docs/design.md), so the fingers and
+How the contact is enforced. MuJoCo's friction is soft (objects creep, docs/design.md, sec. 11), so the fingers and
 the object do not collide in MuJoCo: every bump tip is a contact of the reduced model, applied to the object (and,
 reversed, to the arm) through ``xfrc_applied`` by a compiled step (``_kernel``):
 

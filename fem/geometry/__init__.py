@@ -1,4 +1,4 @@
-"""Parametric gel geometries in mm (DESIGN.md frame: top at z = 0, bonded base at z = -height), each validated,
+"""Parametric gel geometries in mm (docs/design.md, sec. 4: top at z = 0, bonded base at z = -height), each validated,
 with closed-form volume and contact-side area, and a checked watertight triangle surface for meshing."""
 
 from fem.geometry.array import ArrayGeometry

@@ -1,7 +1,7 @@
 """Single-contact gels: a flat pad, an axisymmetric (spherical or power-law) cap and a rounded flat punch, in mm.
 
-Frame (DESIGN.md): the highest point of the gel is at z = 0, where the rigid body first touches; the base (sensor
-plane, bonded) is at z = -height; x, y tangential, the gel centred on the z axis.
+Frame (docs/design.md, sec. 4): the highest point of the gel is at z = 0, where the rigid body first touches; the base
+(sensor plane, bonded) is at z = -height; x, y tangential, the gel centred on the z axis.
 """
 
 from __future__ import annotations
@@ -126,7 +126,7 @@ class CapGeometry(_CapOnBase):
     sphere_radius : float
         Sphere radius R [mm] of the spherical profile (used when ``exponent`` is None); cap_radius <= R.
     exponent : float or None
-        n of the power-law profile z = -C rho^n (THEORY.md sec. 1), 1 (cone) <= n <= 64; None for a sphere.
+        n of the power-law profile z = -C rho^n (docs/theory.md, sec. 3.2), 1 (cone) <= n <= 64; None for a sphere.
     power_law_height : float or None
         Cap height [mm] of the power-law profile, which sets C = power_law_height / cap_radius^n. Required with
         ``exponent`` and only then.
@@ -211,7 +211,7 @@ class CapGeometry(_CapOnBase):
 
 @dataclass(frozen=True)
 class FlatCapGeometry(_CapOnBase):
-    """Rounded flat punch on a base layer (paper Fig. 3, THEORY.md sec. 2): a flat top of radius b at z = 0
+    """Rounded flat punch on a base layer (paper Fig. 3, docs/theory.md, sec. 5.2): a flat top of radius b at z = 0
     blending tangentially into a circular arc of radius ``edge_radius`` down to the footprint radius ``cap_radius``.
 
     Parameters
