@@ -84,7 +84,7 @@ def _fine_radius_and_half(scene: Scene) -> tuple[float, bool]:
 
 
 def _gel_mesh(scene: Scene, fine_radius: float, half: bool):
-    """The gel's tet mesh: a graded bisection mesh for a block, pytetwild (cached on disk) for the other shapes."""
+    """The gel's tet mesh: a graded bisection mesh for a block, gmsh (cached on disk) for the other shapes."""
     size_contact = scene.mesh.size_contact * scene.mesh.order       # P2 elements carry mid-edge nodes
     if scene.gel.shape == "block":
         spec = BlockMeshSpec(width=scene.gel.width, depth=scene.gel.depth, thickness=scene.gel.thickness,

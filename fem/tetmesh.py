@@ -1,6 +1,12 @@
-"""Graded tetrahedral meshes of the gel geometries: fTetWild (pytetwild) with a background sizing field, a
-structured bisection mesh for the flat pad, cleaned up (positive orientation, exact base and top planes), checked
-for quality and cached on disk.
+"""Graded tetrahedral meshes of the gel geometries: gmsh (OpenCASCADE solid, Delaunay, one thread) with an
+analytic sizing field for caps and arrays, the structured bisection mesher for the flat pad; cleaned up (positive
+orientation, exact base and top planes), checked for quality and cached on disk.
+
+Same geometry, same spec and same mesher versions give the same mesh, node for node, on every run: gmsh's Delaunay
+and optimisers are deterministic on one thread (its configuration files and environment are not read), and the
+bisection mesher is plain numpy. fTetWild (pytetwild), used before, was not: it shuffles the input triangles with a
+``std::random_device`` seed (``sort_input_faces``) and runs its optimiser on TBB threads, so the same cap gave
+1838, 1660 and 1765 nodes in three runs.
 
 Sizing (edge length [mm]) at a point x, the smallest of: ``size_contact + grading * d_contact(x)``, d_contact the
 distance to the ball of radius ``contact_radius`` about each first-contact point (bump top, apex, pad centre);
@@ -12,7 +18,7 @@ from __future__ import annotations
 import dataclasses
 import importlib
 import os
-import tempfile
+import threading
 import time
 from dataclasses import dataclass
 
@@ -23,13 +29,18 @@ from fem.mesh import MeshQuality, graded_block_mesh, mesh_quality, quiet_skfem
 from fem.mesh_cache import MeshCache, cache_key
 from fem.validation import check_positive, check_range
 
-__all__ = ["GelMesh", "MeshQualityError", "TetMeshSpec", "mesh_gel", "tetrahedralize", "write_mesh_vtu"]
+__all__ = ["GelMesh", "MeshQualityError", "MesherUnavailable", "TetMeshSpec", "mesh_gel", "tetrahedralize", "write_mesh_vtu"]
 
-MESHER_REVISION = 1          # bump when the meshing or clean-up algorithm changes: old cache entries then miss
+MESHER_REVISION = 2          # bump when the meshing or clean-up algorithm changes: old cache entries then miss
+# 1: fTetWild (pytetwild); 2: gmsh, one thread, OpenCASCADE solids from the exact profile
 
 
 class MeshQualityError(RuntimeError):
     """A mesh failed the quality check (too small a dihedral angle, or a tet of zero volume)."""
+
+
+class MesherUnavailable(RuntimeError):
+    """gmsh cannot be loaded (not installed, or its shared library misses a system library)."""
 
 
 @dataclass(frozen=True)
@@ -48,11 +59,10 @@ class TetMeshSpec:
         Edge length on the sensor plane z = -height [mm]; None means ``size_far``.
     grading : float
         Growth of the edge length with distance from the fine regions [mm per mm].
-    envelope : float or None
-        fTetWild's envelope [mm]: its boundary stays within this distance of the input surface; the contact side is
-        then projected onto the exact surface. None means min(size_contact / 4, 0.05 mm). Smaller is much slower.
     segments : int
-        Chords per full turn when tessellating curved surfaces.
+        Samples per full turn of arc along the gel's profile; the solid of revolution is a spline through them
+        (at 1024 it is within 1e-8 mm of the exact profile on the shipped geometries) and the contact side is then
+        projected onto the exact surface.
     min_dihedral_deg : float
         Meshes with a smaller dihedral angle [deg] are rejected.
     """
@@ -62,8 +72,7 @@ class TetMeshSpec:
     contact_radius: float
     size_base: float | None = None
     grading: float = 0.5
-    envelope: float | None = None
-    segments: int = 64
+    segments: int = 1024
     min_dihedral_deg: float = 1.0
 
     def __post_init__(self):
@@ -74,21 +83,20 @@ class TetMeshSpec:
         if self.size_base is not None:
             check_range("size_base", self.size_base, 0.0, self.size_far, "mm (at most size_far)", low_open=True)
         check_positive("grading", self.grading)
-        if self.envelope is not None:
-            check_range("envelope", self.envelope, 0.0, self.size_contact, "mm (at most size_contact)",
-                        low_open=True)
-        check_range("segments", self.segments, 16, 1024)
+        check_range("segments", self.segments, 64, 8192)
         check_range("min_dihedral_deg", self.min_dihedral_deg, 0.0, 70.0, "deg")
 
     @property
-    def envelope_mm(self) -> float:
-        return self.envelope if self.envelope is not None else min(self.size_contact / 4.0, 0.05)
+    def snap_tolerance(self) -> float:
+        """Distance [mm] within which a boundary node is snapped onto a box plane or the exact contact side: far
+        above the spline's and round-off's error, far below an element (1e-3 size_contact)."""
+        return 1e-3 * self.size_contact
 
 
 @dataclass(frozen=True)
 class _SizingField:
     """Target edge length over the gel's bounding box, shaped as ``fem.mesh.BlockMeshSpec`` so that
-    ``graded_block_mesh`` meshes the box with it (the flat pad itself, or the background mesh for fTetWild)."""
+    ``graded_block_mesh`` meshes the box with it (the flat pad), and written as a gmsh formula for the others."""
 
     width: float
     depth: float
@@ -99,7 +107,6 @@ class _SizingField:
     contact_radius: float
     grading: float
     centers: tuple                  # ((x, y), ...) first-contact points, at z = 0
-    scale: float = 1.0              # a background mesh may be coarser than the field it carries
     half: bool = False              # read by graded_block_mesh: always the whole gel here
 
     def edge_length(self, points: np.ndarray) -> np.ndarray:
@@ -112,7 +119,17 @@ class _SizingField:
         return np.minimum(np.minimum(contact, base), self.size_far)
 
     def target_size(self, points: np.ndarray) -> np.ndarray:
-        return self.scale * self.edge_length(points)
+        return self.edge_length(points)
+
+    def gmsh_formula(self) -> str:
+        """``edge_length`` as a gmsh MathEval expression (numbers by repr, so exactly the same field)."""
+        distance = [f"Sqrt((x - ({x!r}))^2 + (y - ({y!r}))^2 + z^2)" for x, y in self.centers]
+        nearest = distance[0]
+        for term in distance[1:]:
+            nearest = f"Min({nearest}, {term})"
+        contact = f"{self.size_contact!r} + {self.grading!r} * Max({nearest} - {self.contact_radius!r}, 0)"
+        base = f"{self.size_base!r} + {self.grading!r} * (z + {self.thickness!r})"
+        return f"Min(Min({contact}, {base}), {self.size_far!r})"
 
 
 @dataclass(frozen=True)
@@ -132,25 +149,104 @@ def _footprint(geometry) -> tuple[float, float]:
             getattr(geometry, "depth", None) or geometry.base_depth)
 
 
-def _sizing(geometry, spec: TetMeshSpec, scale: float = 1.0) -> _SizingField:
+def _sizing(geometry, spec: TetMeshSpec) -> _SizingField:
     width, depth = _footprint(geometry)
     centers = tuple(map(tuple, np.asarray(geometry.contact_centers(), dtype=float).tolist()))
     return _SizingField(width, depth, geometry.height, spec.size_contact, spec.size_far,
                         spec.size_base if spec.size_base is not None else spec.size_far, spec.contact_radius,
-                        spec.grading, centers, scale)
+                        spec.grading, centers)
 
 
-def _pytetwild():
-    """pytetwild's compiled wrapper (``tetrahedralize_mesh``); pytetwild imports PyVista, a core dependency for it."""
-    import pytetwild
+GMSH_OPTIONS = {
+    "General.Terminal": 0,
+    # one thread everywhere: gmsh's Delaunay and optimisers are then deterministic
+    "General.NumThreads": 1, "Mesh.MaxNumThreads1D": 1, "Mesh.MaxNumThreads2D": 1, "Mesh.MaxNumThreads3D": 1,
+    # the sizing field alone sets the element size (not the CAD points, curvature or boundary)
+    "Mesh.MeshSizeExtendFromBoundary": 0, "Mesh.MeshSizeFromPoints": 0, "Mesh.MeshSizeFromCurvature": 0,
+    "Mesh.Algorithm3D": 1,                    # Delaunay
+    # gmsh's and Netgen's optimisers: min dihedral 21.7 instead of 13.7 deg on the Fig. 4 cap at h = 0.4 mm
+    "Mesh.Optimize": 1, "Mesh.OptimizeNetgen": 1,
+}                                             # part of the mesh cache key: a change re-meshes
+_GMSH_LOCK = threading.Lock()     # gmsh is one global state per process: one mesh at a time
 
-    return pytetwild.PyfTetWildWrapper
+
+def _gmsh():
+    """The gmsh module, or MesherUnavailable saying what to install."""
+    try:
+        import gmsh
+
+        gmsh.isInitialized()             # fails here when libgmsh could not be loaded
+    except (ImportError, OSError, AttributeError) as error:
+        raise MesherUnavailable(
+            f"gmsh could not be loaded ({error}); it meshes caps and arrays: pip install gmsh, and on Debian/Ubuntu "
+            f"the system libraries its wheel links: apt-get install libglu1-mesa libxcursor1 libxft2 libxinerama1"
+        ) from None
+    return gmsh
 
 
 def _versions() -> dict:
     from importlib.metadata import version
 
-    return {name: version(name) for name in ("pytetwild", "manifold3d", "scikit-fem")}
+    return {name: version(name) for name in ("gmsh", "scikit-fem")}
+
+
+def _even_profile(points: np.ndarray) -> np.ndarray:
+    """The profile (m, 2) with every chord longer than the median split evenly, so that a spline through it does
+    not overshoot where a straight piece (the flat of a flat cap: one chord) meets a finely sampled arc."""
+    lengths = np.hypot(*np.diff(points, axis=0).T)
+    step = float(np.median(lengths))
+    pieces = [points[:1]]
+    for start, end, length in zip(points[:-1], points[1:], lengths):
+        count = max(1, int(np.ceil(length / step - 1e-9)))
+        pieces.append(start + np.outer(np.arange(1, count + 1) / count, end - start))
+    return np.vstack(pieces)
+
+
+def _revolved_profiles(geometry, segments: int):
+    """(rho, z) profile points [mm] from the axis to the rim, the axis positions (k, 2) and the base top z [mm]."""
+    profile = _even_profile(geometry._profile_points(segments))
+    if hasattr(geometry, "bump_centers"):
+        return profile, np.asarray(geometry.bump_centers, float), -geometry.bump_radius
+    return profile, np.zeros((1, 2)), -geometry.cap_height
+
+
+def _gmsh_mesh(geometry, spec: TetMeshSpec) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes (n, 3) and tets (m, 4) [mm] of a cap or array: the base box fused with one solid of revolution per
+    bump (a spline through the profile, revolved about the bump axis), meshed with the sizing field on one thread."""
+    gmsh = _gmsh()
+    profile, axes, base_top = _revolved_profiles(geometry, spec.segments)
+    width, depth = _footprint(geometry)
+    floor = base_top - 0.5 * geometry.base_thickness          # the revolved solids reach into the base
+    with _GMSH_LOCK:
+        gmsh.initialize(["-noenv"], readConfigFiles=False)
+        try:
+            for name, value in GMSH_OPTIONS.items():
+                gmsh.option.setNumber(name, value)
+            occ = gmsh.model.occ
+            box = occ.addBox(-width / 2, -depth / 2, -geometry.height, width, depth, geometry.height + base_top)
+            solids = []
+            for cx, cy in axes:
+                points = [occ.addPoint(cx + rho, cy, z) for rho, z in profile]
+                rim, axis = occ.addPoint(cx + profile[-1, 0], cy, floor), occ.addPoint(cx, cy, floor)
+                curves = [occ.addSpline(points), occ.addLine(points[-1], rim), occ.addLine(rim, axis),
+                          occ.addLine(axis, points[0])]
+                face = occ.addPlaneSurface([occ.addCurveLoop(curves)])
+                solids += [tag for tag in occ.revolve([(2, face)], cx, cy, 0.0, 0.0, 0.0, 1.0, 2.0 * np.pi)
+                           if tag[0] == 3]
+            occ.fuse([(3, box)], solids)
+            occ.synchronize()
+            field = gmsh.model.mesh.field.add("MathEval")
+            gmsh.model.mesh.field.setString(field, "F", _sizing(geometry, spec).gmsh_formula())
+            gmsh.model.mesh.field.setAsBackgroundMesh(field)
+            gmsh.model.mesh.generate(3)
+            tags, coordinates, _ = gmsh.model.mesh.getNodes()
+            element_types, _, element_nodes = gmsh.model.mesh.getElements(3)
+        finally:
+            gmsh.finalize()
+    tet_nodes = element_nodes[list(element_types).index(4)]      # gmsh type 4: 4-node tetrahedron
+    index = np.zeros(int(tags.max()) + 1, dtype=np.int64)
+    index[tags.astype(np.int64)] = np.arange(tags.size)
+    return coordinates.reshape(-1, 3), index[tet_nodes.astype(np.int64).reshape(-1, 4)]
 
 
 def _run_mesher(geometry, spec: TetMeshSpec) -> tuple[np.ndarray, np.ndarray]:
@@ -158,24 +254,7 @@ def _run_mesher(geometry, spec: TetMeshSpec) -> tuple[np.ndarray, np.ndarray]:
     if isinstance(geometry, BlockGeometry):
         mesh = graded_block_mesh(_sizing(geometry, spec))
         return mesh.p.T, mesh.t.T
-    surface = geometry.surface(spec.segments)
-    background = graded_block_mesh(_sizing(geometry, spec, scale=2.0))
-    diagonal = float(np.linalg.norm(surface.bounds[1] - surface.bounds[0]))
-    wrapper = _pytetwild()
-    cwd = os.getcwd()
-    with tempfile.TemporaryDirectory(prefix="tetwild-") as folder:
-        os.chdir(folder)                            # fTetWild writes __tracked_surface.stl into the cwd
-        try:
-            nodes, tets = wrapper.tetrahedralize_mesh(
-                np.ascontiguousarray(surface.vertices, dtype=np.float64),
-                np.ascontiguousarray(surface.faces, dtype=np.uint32),
-                True, False, 0.05, spec.size_far, spec.envelope_mm / diagonal, 10.0, False, 0, 80, 6, True, False,
-                False, np.ascontiguousarray(background.p.T, dtype=np.float64),
-                np.ascontiguousarray(background.t.T, dtype=np.int32),
-                np.ascontiguousarray(_sizing(geometry, spec).edge_length(background.p), dtype=np.float64))
-        finally:
-            os.chdir(cwd)
-    return np.asarray(nodes, dtype=float), np.asarray(tets, dtype=np.int64)
+    return _gmsh_mesh(geometry, spec)
 
 
 def _boundary_nodes(tets: np.ndarray) -> np.ndarray:
@@ -191,10 +270,9 @@ def _clean(geometry, spec: TetMeshSpec, nodes: np.ndarray, tets: np.ndarray) -> 
     used, tets = np.unique(tets, return_inverse=True)
     tets = tets.reshape(-1, 4)
     nodes = nodes[used].copy()
-    tolerance = spec.envelope_mm
+    tolerance = spec.snap_tolerance
     width, depth = _footprint(geometry)
     boundary = _boundary_nodes(tets)
-    x, y, z = nodes[boundary].T
     planes = ((0, width / 2), (0, -width / 2), (1, depth / 2), (1, -depth / 2), (2, -geometry.height))
     on_box = np.zeros(boundary.size, dtype=bool)
     for axis, level in planes:
@@ -203,7 +281,7 @@ def _clean(geometry, spec: TetMeshSpec, nodes: np.ndarray, tets: np.ndarray) -> 
         on_box |= near
     top = boundary[~on_box]
     exact = geometry.top_surface_height(nodes[top, :2])
-    close = np.abs(nodes[top, 2] - exact) <= 1.5 * tolerance   # steep walls keep fTetWild's (within envelope) place
+    close = np.abs(nodes[top, 2] - exact) <= tolerance        # nodes of the contact side (not of steep side walls)
     nodes[top[close], 2] = exact[close]
     for center in np.asarray(geometry.contact_centers(), dtype=float):
         nearby = top[np.hypot(*(nodes[top, :2] - center).T) <= max(spec.contact_radius, spec.size_contact)]
@@ -246,7 +324,8 @@ def mesh_gel(geometry, spec: TetMeshSpec, cache_dir=None, use_cache: bool = True
     mesh_parameters = dataclasses.asdict(spec)
     del mesh_parameters["min_dihedral_deg"]        # the acceptance threshold does not change the mesh
     payload = {"geometry": type(geometry).__name__, "geometry_parameters": dataclasses.asdict(geometry),
-               "spec": mesh_parameters, "versions": _versions(), "revision": MESHER_REVISION}
+               "spec": mesh_parameters, "versions": _versions(), "revision": MESHER_REVISION,
+               "mesher_options": {} if isinstance(geometry, BlockGeometry) else GMSH_OPTIONS}
     key = cache_key(payload)
     cache = MeshCache(cache_dir)
     stored = cache.load(key) if use_cache else None

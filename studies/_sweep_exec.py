@@ -7,7 +7,7 @@ the client writes the returned records itself when the task ends.
 
 Across runs: a re-run of the same sweep prepares nothing, since every recorded case is skipped. The cases it does
 run (new axis values, --retry-failed, an interrupted group, every case after an upgrade) prepare again per group:
-curved gels read their fTetWild mesh from the disk cache (fem.mesh_cache; meshing is the slow step, 10-70 s); a
+curved gels read their gmsh mesh from the disk cache (fem.mesh_cache; meshing is the slow step, 1-15 s); a
 block is bisected again (graded bisection is deterministic and took 0.3-0.6 s of a 1.3-2.9 s prepare in the
 example sweep, 8.6k-12.5k DOF, so it is not cached); the stiffness is assembled and factorized again. The
 factorization cannot go to disk: pypardiso keeps PARDISO's factors in MKL's memory (its ``pt`` holds raw

@@ -26,7 +26,7 @@ def test_fig3_quick_follows_ciavarella_jager(tmp_path):
     for row in rows:
         assert float(row["error"]) == pytest.approx(float(row["stick_ratio_fem"]) - float(row["stick_ratio_theory"]))
     # quick mesh h = a/5: the stick and contact edges are each known to +-h/2 (docs/theory.md, sec. 11.1), so c/a to
-    # +-(h/2a)(1 + c/a) <= h/a = 0.2; checked up to Q/(mu P) = 0.9 (fTetWild meshes differ from run to run)
+    # +-(h/2a)(1 + c/a) <= h/a = 0.2; checked up to Q/(mu P) = 0.9 (the mesh is the same on every run)
     assert summary["max_error"] < QUICK_H_OVER_A
     # the flat face keeps the stick zone: at Q/(mu P) = 0.9 more stays stuck the larger b/a is
     at_09 = {float(r["b_over_a"]): float(r["stick_ratio_fem"]) for r in rows if float(r["load_ratio"]) == 0.9}
@@ -45,8 +45,13 @@ def test_fig4_quick_pad_drops_late_and_cap_follows_mindlin(tmp_path):
     cap_at_half = next(r for r in rows if r["case"] == "spherical cap" and float(r["load_ratio"]) == 0.5)
     assert abs(float(cap_at_half["error"])) < QUICK_H_OVER_A
     # the pad stays almost fully stuck at moderate load and loses most of its stick area only near gross slip
+    # (flat punch: c/a = 1 until Q -> mu P), the cap gradually (Cattaneo-Mindlin loses 0.33 of c/a up to
+    # Q/(mu P) = 0.7 and 0.30 from there to 0.95): the pad's late loss is over twice its early loss, the cap's is not.
+    # (This compared the pad's late loss with twice the cap's, 0.618 against 2 x 0.301 = 0.602 in theory: a 3 %
+    # margin that mesh noise crossed.)
     assert pad[0.3] > 0.95 and pad[0.3] > cap[0.3]
-    assert pad[0.7] - pad[0.95] > 2 * (cap[0.7] - cap[0.95])
+    assert pad[0.7] - pad[0.95] > 2 * (1.0 - pad[0.7])
+    assert cap[0.7] - cap[0.95] < 2 * (1.0 - cap[0.7])
     assert (tmp_path / "fig4.png").exists()
 
 
