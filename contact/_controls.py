@@ -84,16 +84,17 @@ def scaled(control: BodyControl, factor: float) -> BodyControl:
                                tangential_force=times(control.tangential_force), torque=times(control.torque))
 
 
-def check_feasible(control: BodyControl, state: ContactState, mu: float, lever: np.ndarray) -> None:
+def check_feasible(control: BodyControl, state: ContactState, friction_coefficient: float, lever: np.ndarray) -> None:
     """Refuse force targets the contact cannot carry (beyond gross slip) before trying to solve them."""
     normal = control.normal_force if control.normal_force is not None else float(state.normal_force.sum())
     if control.tangential_force is not None:
         magnitude = math.hypot(*control.tangential_force)
-        if magnitude >= mu * normal:
-            raise ValueError(f"shear force {magnitude:.4g} N is not below mu*P = {mu * normal:.4g} N: the contact "
+        if magnitude >= friction_coefficient * normal:
+            raise ValueError(f"shear force {magnitude:.4g} N is not below friction_coefficient x P = "
+                             f"{friction_coefficient * normal:.4g} N: the contact "
                              f"cannot carry it (gross slip); use a shift (displacement control) instead")
     if control.torque is not None and np.any(state.normal_force > 0):
-        limit = mu * float((state.normal_force * np.linalg.norm(lever, axis=1)).sum())
+        limit = friction_coefficient * float((state.normal_force * np.linalg.norm(lever, axis=1)).sum())
         if abs(control.torque) >= limit:
             raise ValueError(f"torque {control.torque:.4g} N mm is not below the full-slip torque "
                              f"{limit:.4g} N mm of the current pressure: the contact cannot carry it")

@@ -1,34 +1,75 @@
-"""Scenes: a gel, its material, a rigid body, friction, mesh settings and a load path; TOML in, dataclasses out."""
+"""Scenes: a gel, its material, a rigid body, friction, mesh settings and a load path; TOML in, dataclasses out.
+
+Types are strict and every problem of a file is reported at once (``fem.validation.InputErrors``, one line per
+problem naming the key, its value and what is allowed). String options become enums where they enter
+(``GelShape``, ``BodyShape``, ``Symmetry``, ``Volumetric``, ``LoadKind``, ``LoadControl``). The friction coefficient
+is ``friction_coefficient`` everywhere; the old key ``mu`` is refused with the new name.
+"""
 
 from __future__ import annotations
 
 import math
 import sys
+import warnings
 from dataclasses import dataclass, field, fields
-from enum import Enum
 from pathlib import Path
 
 import numpy as np
 
-from fem.elasticity import VOLUMETRIC_FORMULATIONS
-from fem.validation import check_positive, check_range
+from fem.validation import (Choice, InputErrors, check_all, check_bool, check_integer, check_positive,
+                            check_range, describe, parse_choice)
 
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
     import tomli as tomllib
 
-__all__ = ["GelSpec", "Material", "BodySpec", "ContactSpec", "MeshSettings", "Load", "LoadKind", "Scene",
-           "load_scene", "scene_from_dict"]
+__all__ = ["GelSpec", "Material", "BodySpec", "ContactSpec", "MeshSettings", "Load", "LoadKind", "LoadControl",
+           "GelShape", "BodyShape", "Symmetry", "Volumetric", "Scene", "load_scene", "scene_from_dict",
+           "read_toml_file", "RENAMED_KEYS"]
 
 
-class LoadKind(str, Enum):
+class LoadKind(Choice):
     PRESS = "press"
     SHEAR = "shear"
     TWIST = "twist"
 
 
-_GEL_SHAPES = {"block": "BlockGeometry", "cap": "CapGeometry", "flat_cap": "FlatCapGeometry", "array": "ArrayGeometry"}
+class LoadControl(Choice):
+    FORCE = "force"                   # force [N] or torque [N mm]
+    DISPLACEMENT = "displacement"     # depth, shift [mm] or angle [rad]
+
+
+class GelShape(Choice):
+    BLOCK = "block"
+    CAP = "cap"
+    FLAT_CAP = "flat_cap"
+    ARRAY = "array"
+
+
+class BodyShape(Choice):
+    SPHERE = "sphere"
+    PLANE = "plane"
+
+
+class Symmetry(Choice):
+    AUTO = "auto"                     # half model when the scene is mirror-symmetric about y = 0
+    OFF = "off"
+
+
+class Volumetric(Choice):
+    STANDARD = "standard"             # lambda tr(eps)^2 per element
+    NODAL_AVERAGE = "nodal_average"   # average nodal pressure (P1 only), locking-free for nu -> 0.5
+
+
+_GEL_CLASSES = {GelShape.BLOCK: "BlockGeometry", GelShape.CAP: "CapGeometry", GelShape.FLAT_CAP: "FlatCapGeometry",
+                GelShape.ARRAY: "ArrayGeometry"}
+RENAMED_KEYS = {("contact", "mu"): "friction_coefficient"}     # (section, old key) -> new key
+
+
+def _prefixed(prefix: str, error: ValueError) -> InputErrors:
+    problems = error.problems if isinstance(error, InputErrors) else [str(error)]
+    return InputErrors(f"{prefix}{problem}" for problem in problems)
 
 
 @dataclass(frozen=True)
@@ -41,12 +82,11 @@ class GelSpec:
     geometry's defaults.
     """
 
-    shape: str = "block"
+    shape: GelShape = GelShape.BLOCK
     parameters: tuple = (("width", 40.0), ("depth", 40.0), ("thickness", 20.0))
 
     def __post_init__(self):
-        if self.shape not in _GEL_SHAPES:
-            raise ValueError(f"gel.shape={self.shape!r} is not one of {sorted(_GEL_SHAPES)}")
+        object.__setattr__(self, "shape", parse_choice("gel.shape", self.shape, GelShape))
         object.__setattr__(self, "_geometry", self._build_geometry())   # validated where the scene enters
 
     @property
@@ -57,27 +97,33 @@ class GelSpec:
     def _build_geometry(self):
         import fem.geometry
 
-        cls = getattr(fem.geometry, _GEL_SHAPES[self.shape])
+        cls = getattr(fem.geometry, _GEL_CLASSES[self.shape])
         known = {f.name for f in fields(cls)}
         unknown = sorted(set(dict(self.parameters)) - known)
         if unknown:
-            raise ValueError(f"unknown key(s) {unknown} in [gel] for shape {self.shape!r}; allowed: {sorted(known)}")
+            raise ValueError(f"gel: unknown key(s) {unknown} for shape {self.shape.value!r}; allowed: "
+                             f"{sorted(known | {'shape'})}")
         try:
             return cls(**dict(self.parameters))
-        except (TypeError, ValueError) as error:
-            raise ValueError(f"[gel] ({self.shape}): {error}") from None
+        except ValueError as error:
+            raise _prefixed("gel.", error) from None
 
     @property
     def curvature_radius(self) -> float:
         """Radius of curvature of the gel at its first-contact points [mm] (inf where it is flat)."""
         geometry = self.geometry
-        if self.shape == "cap" and geometry.exponent in (None, 2, 2.0):
+        if self.shape == GelShape.CAP and geometry.exponent in (None, 2, 2.0):
             return geometry.sphere_radius if geometry.exponent is None else 1.0 / (2.0 * geometry.profile_coefficient)
-        if self.shape == "flat_cap" and geometry.flat_radius == 0.0:
+        if self.shape == GelShape.FLAT_CAP and geometry.flat_radius == 0.0:
             return geometry.edge_radius
-        if self.shape == "array":
+        if self.shape == GelShape.ARRAY:
             return geometry.bump_radius
         return math.inf
+
+    @property
+    def thickness_under_contact(self) -> float:
+        """Gel thickness [mm] below the first-contact points (top at z = 0, bonded base at z = -height)."""
+        return float(self.geometry.height)
 
     def __getattr__(self, name):
         # width, depth, thickness, ... read through to the geometry (convenient for the block)
@@ -97,8 +143,8 @@ class Material:
     nu: float = 0.45
 
     def __post_init__(self):
-        check_positive("material.E", self.E, "MPa")
-        check_range("material.nu", self.nu, -1.0, 0.5, low_open=True, high_open=True)
+        check_all(lambda: check_positive("material.E", self.E, "MPa"),
+                  lambda: check_range("material.nu", self.nu, -1.0, 0.5, low_open=True, high_open=True))
 
     @property
     def shear_modulus(self) -> float:
@@ -110,25 +156,34 @@ class Material:
         return self.E / (1.0 - self.nu**2)
 
 
+def _check_pair(name: str, value, unit: str) -> tuple[float, float]:
+    """(x, y) of two finite numbers, else ValueError naming ``name``."""
+    if isinstance(value, (str, bytes)) or not hasattr(value, "__len__") or len(value) != 2:
+        raise ValueError(f"{name}={describe(value)} must be two numbers [x, y] in {unit}")
+    return (check_range(f"{name}[0]", value[0], -math.inf, math.inf, unit),
+            check_range(f"{name}[1]", value[1], -math.inf, math.inf, unit))
+
+
 @dataclass(frozen=True)
 class BodySpec:
     """Rigid counter-body: a sphere of given radius [mm] or a plane, initially touching the gel at ``center``."""
 
-    shape: str = "sphere"
+    shape: BodyShape = BodyShape.SPHERE
     radius: float = 10.0
     center: tuple[float, float] = (0.0, 0.0)
 
     def __post_init__(self):
-        if self.shape not in ("sphere", "plane"):
-            raise ValueError(f"body.shape={self.shape!r} is not one of ['plane', 'sphere']")
-        if self.shape == "sphere":
-            check_positive("body.radius", self.radius, "mm")
-        if len(self.center) != 2:
-            raise ValueError(f"body.center={self.center!r} must be [x, y] in mm")
+        def shape():
+            object.__setattr__(self, "shape", parse_choice("body.shape", self.shape, BodyShape))
+
+        def center():
+            object.__setattr__(self, "center", _check_pair("body.center", self.center, "mm"))
+
+        check_all(shape, center, lambda: check_positive("body.radius", self.radius, "mm"))
 
     def initial_gap(self, xy: np.ndarray) -> np.ndarray:
         """Vertical distance from the body's lowest point level to its surface above points xy (n, 2) [mm]."""
-        if self.shape == "plane":
+        if self.shape == BodyShape.PLANE:
             return np.zeros(len(xy))
         r2 = ((xy - np.asarray(self.center)) ** 2).sum(axis=1)
         return np.where(r2 < self.radius**2, self.radius - np.sqrt(np.maximum(self.radius**2 - r2, 0.0)), np.inf)
@@ -136,29 +191,38 @@ class BodySpec:
 
 @dataclass(frozen=True)
 class ContactSpec:
-    """Coulomb friction coefficient mu; ``frictionless_press`` switches friction on only after the press loads."""
+    """Coulomb friction coefficient [-]; ``frictionless_press`` switches friction on only after the press loads."""
 
-    mu: float = 0.5
+    friction_coefficient: float = 0.5
     frictionless_press: bool = False
     tolerance: float = 1e-10          # Newton residual, relative to the normal force
     max_iterations: int = 60
-    symmetry: str = "auto"            # "auto": half model when the scene is mirror-symmetric about y = 0; "off"
+    symmetry: Symmetry = Symmetry.AUTO
 
     def __post_init__(self):
-        if self.symmetry not in ("auto", "off"):
-            raise ValueError(f"contact.symmetry={self.symmetry!r} is not one of ['auto', 'off']")
-        check_range("contact.mu", self.mu, 0.0, 5.0)
-        # below ~1e-13 the Newton residual meets round-off and can never be reached
-        check_range("contact.tolerance", self.tolerance, 1e-13, 1e-3)
-        check_range("contact.max_iterations", self.max_iterations, 1, 10_000)
+        def symmetry():
+            object.__setattr__(self, "symmetry", parse_choice("contact.symmetry", self.symmetry, Symmetry))
+
+        check_all(symmetry,
+                  lambda: check_range("contact.friction_coefficient", self.friction_coefficient, 0.0, 5.0),
+                  lambda: check_bool("contact.frictionless_press", self.frictionless_press),
+                  # below ~1e-13 the Newton residual meets round-off and can never be reached
+                  lambda: check_range("contact.tolerance", self.tolerance, 1e-13, 1e-3),
+                  lambda: check_integer("contact.max_iterations", self.max_iterations, 1, 10_000))
+
+    @property
+    def mu(self) -> float:
+        """Deprecated name of ``friction_coefficient``."""
+        warnings.warn("ContactSpec.mu is renamed friction_coefficient", DeprecationWarning, stacklevel=2)
+        return self.friction_coefficient
 
 
 @dataclass(frozen=True)
 class MeshSettings:
     """Element size where contact can occur and far from it [mm], element order; fine zone radius (auto if None).
 
-    ``volumetric``: "standard" (lambda tr(eps)^2 per element; P1 locks above nu ~ 0.49, P2 partly) or
-    "nodal_average" (P1 only: average-nodal-pressure tets, locking-free for nu -> 0.5; fem.elasticity).
+    ``volumetric``: STANDARD (lambda tr(eps)^2 per element; P1 locks above nu ~ 0.49, P2 partly) or NODAL_AVERAGE
+    (P1 only: average-nodal-pressure tets, locking-free for nu -> 0.5; fem.elasticity).
     """
 
     size_contact: float = 0.15
@@ -167,23 +231,25 @@ class MeshSettings:
     fine_radius: float | None = None
     grading: float = 0.5
     size_base: float | None = None    # element size on the sensor plane [mm] (curved gels; None: size_far)
-    volumetric: str = "standard"
+    volumetric: Volumetric = Volumetric.STANDARD
 
     def __post_init__(self):
-        check_positive("mesh.size_contact", self.size_contact, "mm")
-        check_positive("mesh.size_far", self.size_far, "mm")
-        if self.order not in (1, 2):
-            raise ValueError(f"mesh.order={self.order!r} is not one of [1, 2]")
-        if self.volumetric not in VOLUMETRIC_FORMULATIONS:
-            raise ValueError(f"mesh.volumetric={self.volumetric!r} is not one of {sorted(VOLUMETRIC_FORMULATIONS)}")
-        if self.volumetric == "nodal_average" and self.order != 1:
-            raise ValueError(f"mesh.volumetric={self.volumetric!r} needs mesh.order=1 (P1 tets), got "
+        def volumetric():
+            object.__setattr__(self, "volumetric", parse_choice("mesh.volumetric", self.volumetric, Volumetric))
+
+        check_all(volumetric,
+                  lambda: check_positive("mesh.size_contact", self.size_contact, "mm"),
+                  lambda: check_positive("mesh.size_far", self.size_far, "mm"),
+                  lambda: check_integer("mesh.order", self.order, 1, 2),
+                  lambda: self.fine_radius is None or check_positive("mesh.fine_radius", self.fine_radius, "mm"),
+                  lambda: self.size_base is None or check_positive("mesh.size_base", self.size_base, "mm"),
+                  lambda: check_positive("mesh.grading", self.grading))
+        if self.size_contact > self.size_far:
+            raise ValueError(f"mesh.size_contact={self.size_contact} mm must not exceed mesh.size_far="
+                             f"{self.size_far} mm")
+        if self.volumetric == Volumetric.NODAL_AVERAGE and self.order != 1:
+            raise ValueError(f"mesh.volumetric={self.volumetric.value!r} needs mesh.order=1 (P1 tets), got "
                              f"mesh.order={self.order}; use mesh.volumetric='standard' with P2")
-        if self.fine_radius is not None:
-            check_positive("mesh.fine_radius", self.fine_radius, "mm")
-        if self.size_base is not None:
-            check_positive("mesh.size_base", self.size_base, "mm")
-        check_positive("mesh.grading", self.grading)
 
 
 @dataclass(frozen=True)
@@ -195,30 +261,34 @@ class Load:
     """
 
     kind: LoadKind
-    control: str                      # "force" (force, torque) or "displacement" (depth, shift, angle)
+    control: LoadControl
     values: tuple[float, ...]
     direction: tuple[float, float] = (1.0, 0.0)
 
     def __post_init__(self):
-        if self.control not in ("force", "displacement"):
-            raise ValueError(f"load control={self.control!r} is not one of ['displacement', 'force']")
+        object.__setattr__(self, "kind", parse_choice("load kind", self.kind, LoadKind))
+        object.__setattr__(self, "control", parse_choice("load control", self.control, LoadControl))
+        key = next(k for k, c in _LOAD_KEYS[self.kind].items() if c == self.control)
+        unit = {"force": "N", "depth": "mm", "shift": "mm", "torque": "N mm", "angle": "rad"}[key]
+        if isinstance(self.values, (str, bytes)) or not hasattr(self.values, "__len__"):
+            raise ValueError(f"{key}={describe(self.values)} must be a number or a list of numbers [{unit}]")
         if not self.values:
-            raise ValueError(f"{self.kind.value} load has an empty list of values")
-        for value in self.values:
-            if self.kind == LoadKind.PRESS:
-                check_positive(f"press {'force' if self.control == 'force' else 'depth'}", value,
-                               "N" if self.control == "force" else "mm")
-            else:
-                check_range(f"{self.kind.value} value", value, -math.inf, math.inf)
-        norm = math.hypot(*self.direction)
-        if self.kind == LoadKind.SHEAR and not (math.isfinite(norm) and norm > 0):
-            raise ValueError(f"shear direction={self.direction!r} must be a non-zero [x, y]")
+            raise ValueError(f"{self.kind.value} load has an empty list of values: {key} = []")
+        if self.kind == LoadKind.PRESS:
+            check_all(*[lambda v=v: check_positive(f"{key}", v, unit) for v in self.values])
+        else:
+            check_all(*[lambda v=v: check_range(f"{key}", v, -math.inf, math.inf, unit) for v in self.values])
+        direction = _check_pair("direction", self.direction, "any unit")
+        if self.kind == LoadKind.SHEAR and not math.hypot(*direction) > 0:
+            raise ValueError(f"direction={list(self.direction)!r} must be a non-zero [x, y]")
+        object.__setattr__(self, "values", tuple(float(v) for v in self.values))
+        object.__setattr__(self, "direction", direction)
 
 
 _LOAD_KEYS = {
-    LoadKind.PRESS: {"force": "force", "depth": "displacement"},
-    LoadKind.SHEAR: {"force": "force", "shift": "displacement"},
-    LoadKind.TWIST: {"torque": "force", "angle": "displacement"},
+    LoadKind.PRESS: {"force": LoadControl.FORCE, "depth": LoadControl.DISPLACEMENT},
+    LoadKind.SHEAR: {"force": LoadControl.FORCE, "shift": LoadControl.DISPLACEMENT},
+    LoadKind.TWIST: {"torque": LoadControl.FORCE, "angle": LoadControl.DISPLACEMENT},
 }
 
 
@@ -235,15 +305,17 @@ class Scene:
     loads: tuple[Load, ...] = ()
 
     def __post_init__(self):
+        if not isinstance(self.name, str) or not self.name:
+            raise ValueError(f"name={describe(self.name)} must be a non-empty string")
         if not self.loads:
             raise ValueError("scene has no [[load]]: give at least one press")
         if self.loads[0].kind != LoadKind.PRESS:
-            raise ValueError(f"the first load must be a press, not {self.loads[0].kind.value!r}")
+            raise ValueError(f"load.0.kind={self.loads[0].kind.value!r}: the first load must be a press")
 
     @property
     def mirror_symmetric(self) -> bool:
         """True when gel, body and every load are symmetric about the plane y = 0 (press, shear along x)."""
-        return (self.gel.shape == "block" and self.body.center[1] == 0.0 and all(
+        return (self.gel.shape == GelShape.BLOCK and self.body.center[1] == 0.0 and all(
             load.kind == LoadKind.PRESS or (load.kind == LoadKind.SHEAR and load.direction[1] == 0.0)
             for load in self.loads))
 
@@ -252,81 +324,137 @@ class Scene:
         return any(load.kind != LoadKind.PRESS for load in self.loads)
 
 
-def _build(cls, table: dict, section: str):
-    """Dataclass ``cls`` from a TOML table, rejecting unknown keys by name."""
+def _build(cls, table, section: str):
+    """Dataclass ``cls`` from a TOML table, rejecting unknown and renamed keys by name, all problems at once."""
     if not isinstance(table, dict):
-        raise ValueError(f"[{section}] must be a table, got {type(table).__name__}")
+        raise ValueError(f"[{section}] must be a table, got {describe(table)}")
     known = {f.name for f in fields(cls)}
-    unknown = sorted(set(table) - known)
-    if unknown:
-        raise ValueError(f"unknown key(s) {unknown} in [{section}]; allowed: {sorted(known)}")
-    values = {}
-    for key, value in table.items():
-        if isinstance(value, list):
-            value = tuple(value)
-        values[key] = value
+    problems = []
+    for key in sorted(set(table) - known):
+        renamed = RENAMED_KEYS.get((section, key))
+        if renamed:
+            problems.append(f"{section}.{key} was renamed {section}.{renamed}: write {renamed} = {table[key]!r}")
+        else:
+            problems.append(f"{section}.{key}: unknown key; allowed: {sorted(known)}")
+    values = {key: tuple(value) if isinstance(value, list) else value for key, value in table.items() if key in known}
     try:
-        return cls(**values)
-    except TypeError as error:
-        raise ValueError(f"[{section}]: {error}") from None
+        built = cls(**values)
+    except ValueError as error:
+        raise InputErrors(problems + (error.problems if isinstance(error, InputErrors) else [str(error)])) from None
+    if problems:
+        raise InputErrors(problems)
+    return built
 
 
-def _load_from_table(table: dict, index: int) -> Load:
-    where = f"load #{index + 1}"
-    if not isinstance(table, dict) or "kind" not in table:
-        raise ValueError(f"{where} needs a 'kind' (one of {[k.value for k in LoadKind]})")
-    try:
-        kind = LoadKind(table["kind"])
-    except ValueError:
-        raise ValueError(f"{where}: kind={table['kind']!r} is not one of {[k.value for k in LoadKind]}") from None
+def _load_from_table(table, index: int) -> Load:
+    where = f"load.{index}"
+    kinds = LoadKind.values()
+    if not isinstance(table, dict):
+        raise ValueError(f"{where} must be a table ([[load]]), got {describe(table)}")
+    if "kind" not in table:
+        raise ValueError(f"{where}.kind is missing: give kind = one of {kinds}")
+    kind = parse_choice(f"{where}.kind", table["kind"], LoadKind)
     allowed = dict(_LOAD_KEYS[kind])
     extra = {"kind"} | ({"direction"} if kind == LoadKind.SHEAR else set())
     unknown = sorted(set(table) - set(allowed) - extra)
     if unknown:
-        raise ValueError(f"{where} ({kind.value}): unknown key(s) {unknown}; allowed: {sorted(set(allowed) | extra)}")
+        raise ValueError(f"{where} ({kind.value}): unknown key(s) {unknown}; allowed: "
+                         f"{sorted(set(allowed) | extra)}")
     given = [key for key in allowed if key in table]
     if len(given) != 1:
         raise ValueError(f"{where} ({kind.value}) needs exactly one of {sorted(allowed)}, got {given}")
     raw = table[given[0]]
-    values = tuple(raw) if isinstance(raw, (list, tuple)) else (raw,)
-    for value in values:
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ValueError(f"{where} ({kind.value}): {given[0]} must be a number or a list of numbers, got {raw!r}")
-    direction = tuple(float(v) for v in table.get("direction", (1.0, 0.0)))
-    return Load(kind, allowed[given[0]], tuple(float(v) for v in values), direction)
+    values = tuple(raw) if isinstance(raw, list) else (raw,)
+    try:
+        return Load(kind, allowed[given[0]], values, table.get("direction", (1.0, 0.0)))
+    except ValueError as error:
+        raise _prefixed(f"{where}.", error) from None
+
+
+SECTIONS = {"material": Material, "body": BodySpec, "contact": ContactSpec, "mesh": MeshSettings}
 
 
 def scene_from_dict(data: dict) -> Scene:
-    """Scene from a parsed TOML document (see studies/scenes/hcm1.toml)."""
-    sections = {"gel": GelSpec, "material": Material, "body": BodySpec, "contact": ContactSpec, "mesh": MeshSettings}
-    unknown = sorted(set(data) - set(sections) - {"name", "load"})
-    if unknown:
-        raise ValueError(f"unknown top-level key(s) {unknown}; allowed: {sorted(set(sections) | {'name', 'load'})}")
+    """Scene from a parsed TOML document (see studies/scenes/hcm1.toml); every problem is reported at once
+    (InputErrors, a ValueError)."""
+    if not isinstance(data, dict):
+        raise ValueError(f"a scene is a table of sections, got {describe(data)}")
+    problems: list[str] = []
+
+    def attempt(build):
+        try:
+            return build()
+        except ValueError as error:
+            problems.extend(error.problems if isinstance(error, InputErrors) else [str(error)])
+            return None
+
+    allowed = sorted(set(SECTIONS) | {"gel", "name", "load"})
+    for key in sorted(set(data) - set(allowed)):
+        problems.append(f"{key}: unknown top-level key; allowed: {allowed}")
     for required in ("gel", "material", "body", "load"):
         if required not in data:
-            raise ValueError(f"scene is missing [{required}]" if required != "load" else "scene is missing [[load]]")
-    gel_table = data["gel"]
-    if not isinstance(gel_table, dict):
-        raise ValueError(f"[gel] must be a table, got {type(gel_table).__name__}")
-    sections = {key: cls for key, cls in sections.items() if key != "gel"}
-    parts = {key: _build(cls, data.get(key, {}), key) for key, cls in sections.items()}
-    parts["gel"] = GelSpec(shape=gel_table.get("shape", "block"),
-                           parameters=tuple(sorted((k, v) for k, v in gel_table.items() if k != "shape")))
-    loads = data["load"]
-    if not isinstance(loads, list):
-        raise ValueError("'load' must be an array of tables: write [[load]]")
-    return Scene(name=str(data.get("name", "scene")), loads=tuple(_load_from_table(t, i) for i, t in enumerate(loads)),
-                 **parts)
+            problems.append(f"scene is missing [{required}]" if required != "load" else "scene is missing [[load]]")
+    parts = {key: attempt(lambda key=key, cls=cls: _build(cls, data.get(key, {}), key)) for key, cls in SECTIONS.items()}
+
+    def gel():
+        table = data["gel"]
+        if not isinstance(table, dict):
+            raise ValueError(f"[gel] must be a table, got {describe(table)}")
+        return GelSpec(shape=table.get("shape", "block"),
+                       parameters=tuple(sorted((k, v) for k, v in table.items() if k != "shape")))
+
+    parts["gel"] = attempt(gel) if "gel" in data else None
+    loads = None
+    if "load" in data:
+        if not isinstance(data["load"], list):
+            problems.append("load must be an array of tables: write [[load]]")
+        else:
+            loads = [attempt(lambda table=table, index=index: _load_from_table(table, index))
+                     for index, table in enumerate(data["load"])]
+    name = data.get("name", "scene")
+    if problems:
+        raise InputErrors(problems)
+    return _scene(name, tuple(loads), parts)
+
+
+def _scene(name, loads, parts) -> Scene:
+    try:
+        return Scene(name=name, loads=loads, **parts)
+    except ValueError as error:
+        raise InputErrors([str(error)]) from None
+
+
+def read_toml_file(path: str | Path, what: str) -> dict:
+    """The parsed TOML document of ``path``; a missing file, a folder, a file that is not UTF-8 text or not TOML
+    raises an error (FileNotFoundError, IsADirectoryError, ValueError) naming ``what`` and the file."""
+    path = Path(path)
+    if path.is_dir():
+        raise IsADirectoryError(f"{what} {str(path)!r} is a folder, not a TOML file")
+    if not path.exists():
+        raise FileNotFoundError(f"{what} {str(path)!r} does not exist")
+    try:
+        raw = path.read_bytes()
+    except OSError as error:
+        raise OSError(f"{what} {str(path)!r} cannot be read: {error.strerror or error}") from None
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
+        raise ValueError(f"{what} {str(path)!r} is UTF-16 text: save it as UTF-8 (TOML files are UTF-8)")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise ValueError(f"{what} {str(path)!r} is not UTF-8 text (byte {error.start} is "
+                         f"{raw[error.start:error.start + 1]!r}): a TOML file is UTF-8 text") from None
+    if "\x00" in text:
+        raise ValueError(f"{what} {str(path)!r} holds NUL bytes: a binary file, not TOML")
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as error:
+        raise ValueError(f"{what} {str(path)!r}: not valid TOML ({error})") from None
 
 
 def load_scene(path: str | Path) -> Scene:
-    """Read a scene TOML file."""
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"scene file {str(path)!r} does not exist")
-    with path.open("rb") as stream:
-        try:
-            data = tomllib.load(stream)
-        except tomllib.TOMLDecodeError as error:
-            raise ValueError(f"{path}: not valid TOML ({error})") from None
-    return scene_from_dict(data)
+    """Read a scene TOML file; every problem in it is reported at once, each line naming the file."""
+    data = read_toml_file(path, "scene file")
+    try:
+        return scene_from_dict(data)
+    except ValueError as error:
+        raise _prefixed(f"{path}: ", error) from None

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field
 
@@ -13,7 +12,9 @@ from contact._newton import OPEN, SLIP, STICK, ContactNotConverged, ContactState
 from contact.result import (ContactResult, ContactUnderResolved, Increment, LoadNotCarried, PathNotCompleted,
                             record_increment)
 from contact.compliance import SurfaceCompliance
-from contact.scene import LoadKind, Scene
+from contact.limits import (PhysicalLimitError, check_increment_limits, check_resources, check_scene_limits,
+                            contact_centers, estimated_contact)
+from contact.scene import Scene
 from fem.elasticity import ElasticModel, assemble_elastic_model
 from fem.linear_solver import SaddlePointFactorization, SpdFactorization
 from fem.mesh import BlockMeshSpec, graded_block_mesh, mesh_quality
@@ -23,46 +24,7 @@ __all__ = ["Increment", "ContactResult", "PathNotCompleted", "Prepared", "factor
            "OPEN", "STICK", "SLIP"]
 
 
-def _max_normal_load(scene: Scene) -> tuple[float | None, float | None]:
-    forces = [v for load in scene.loads if load.kind == LoadKind.PRESS and load.control == "force" for v in load.values]
-    depths = [v for load in scene.loads if load.kind == LoadKind.PRESS and load.control == "displacement"
-              for v in load.values]
-    return (max(forces) if forces else None), (max(depths) if depths else None)
-
-
 MIN_POINTS_PER_CONTACT = 7   # a centre point and one ring: fewer cannot resolve a contact radius or a stick zone
-
-
-def contact_centers(scene: Scene) -> np.ndarray:
-    """Where the body first touches the gel, (k, 2) [mm]: below a sphere's centre, or every bump top for a plane."""
-    if scene.body.shape == "sphere":
-        return np.array([scene.body.center], dtype=float)
-    return np.asarray(scene.gel.geometry.contact_centers(), dtype=float).reshape(-1, 2)
-
-
-def estimated_contact(scene: Scene) -> tuple[float, float]:
-    """Half-space estimate of the contact radius [mm] and indentation [mm] at each contact centre, largest press.
-
-    Curved contacts (sphere body or curved gel) use Hertz with 1/R = 1/R_body + 1/R_gel and the normal force shared
-    equally by the contact centres; a flat-topped cap under a plane acts as a flat punch of its flat radius; a
-    plane on a flat block covers the whole top. Only used to size the fine zone and to seed the first press.
-    """
-    force, depth = _max_normal_load(scene)
-    e_star = scene.material.effective_modulus
-    n_centers = len(contact_centers(scene))
-    body_radius = scene.body.radius if scene.body.shape == "sphere" else math.inf
-    curvature = 1.0 / body_radius + 1.0 / scene.gel.curvature_radius
-    if curvature > 0.0:
-        radius = 1.0 / curvature
-        from_force = (3.0 * (force or 0.0) / n_centers * radius / (4.0 * e_star)) ** (1 / 3)
-        contact_radius = max(from_force, math.sqrt(radius * depth) if depth else 0.0)
-        return contact_radius, contact_radius**2 / radius
-    if scene.gel.shape == "flat_cap":
-        flat = scene.gel.geometry.flat_radius
-        indentation = max(depth or 0.0, (force or 0.0) / n_centers / (2.0 * e_star * flat))
-        return flat + math.sqrt(2.0 * scene.gel.geometry.edge_radius * indentation), indentation
-    half_diagonal = 0.5 * math.hypot(scene.gel.width, scene.gel.depth)
-    return half_diagonal, depth or 1e-3 * scene.gel.thickness
 
 
 @dataclass
@@ -132,6 +94,7 @@ def prepare(scene: Scene) -> Prepared:
     timings = {}
     start = time.perf_counter()
     fine_radius, half = _fine_radius_and_half(scene)
+    estimate = check_resources(scene, fine_radius, half)         # before meshing: refuse what cannot fit
     mesh = _gel_mesh(scene, fine_radius, half)
     timings["mesh"] = time.perf_counter() - start
     start = time.perf_counter()
@@ -149,7 +112,7 @@ def prepare(scene: Scene) -> Prepared:
                  "min_radius_ratio": quality.min_radius_ratio, "fine_radius": fine_radius,
                  "solver_backend": factorization.backend, "factor_nonzeros": factorization.factor_nonzeros,
                  "factorized_system": "saddle_point" if model.saddle_point is not None else "stiffness",
-                 "half_model": half}
+                 "half_model": half, "estimated_dofs": round(estimate["dofs"])}
     return Prepared(model, factorization, timings, mesh_info, fine_radius, half)
 
 
@@ -159,7 +122,12 @@ def _augmentation(areas: np.ndarray, effective_modulus: float) -> np.ndarray:
 
 
 def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool = False) -> ContactResult:
-    """Solve the scene's load path increment by increment; raise PathNotCompleted (with the partial result) on failure."""
+    """Solve the scene's load path increment by increment; raise PathNotCompleted (with the partial result) on failure.
+
+    The physical limits (contact.limits) are checked first: a press past small strain or a contact wider than the
+    body's curvature is refused before meshing, and each increment's depth and sliding are checked as it converges.
+    """
+    check_scene_limits(scene)
     prepared = prepared or prepare(scene)
     model = prepared.model
     timings = dict(prepared.timings)
@@ -188,9 +156,10 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
     if candidates.size == 0:
         raise ValueError(f"the body (a {scene.body.shape} at {list(scene.body.center)} mm) is not above the gel's "
                          f"top face: no point can come into contact")
-    frictional = scene.has_tangential_load and scene.contact.mu > 0
+    frictional = scene.has_tangential_load and scene.contact.friction_coefficient > 0
     if not frictional:
-        left_out.append("tangential contact unknowns: the path has no shear or twist load, or mu = 0")
+        left_out.append("tangential contact unknowns: the path has no shear or twist load, or "
+                        "friction_coefficient = 0")
     components = (0, 1, 2) if frictional else (2,)
     compliance_key = (candidates.tobytes(), components)
     if compliance_key not in prepared.compliances:
@@ -211,6 +180,7 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
     result = ContactResult(scene, model, candidates, timings=timings, mesh_info=dict(prepared.mesh_info),
                            left_out=left_out)
     controls = list(load_controls(scene))
+    warned: set = set()
     bar = None
     if progress:
         from tqdm import tqdm
@@ -221,14 +191,14 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
             step_start = time.perf_counter()
             control = scaled(control, 1.0 / multiplicity)
             try:
-                check_feasible(control, state, scene.contact.mu, lever)
+                check_feasible(control, state, scene.contact.friction_coefficient, lever)
             except ValueError as error:
                 raise LoadNotCarried(f"increment {len(result.increments) + 1} ({kind}): {error}", result) from None
-            mu = scene.contact.mu if friction_on else 0.0
+            friction_coefficient = scene.contact.friction_coefficient if friction_on else 0.0
 
             def solve(start_state, target):
-                return solve_increment(compliance, gap0, lever, augmentation, mu, start_state, target,
-                                       seed_depth=seed_depth, tolerance=scene.contact.tolerance,
+                return solve_increment(compliance, gap0, lever, augmentation, friction_coefficient, start_state,
+                                       target, seed_depth=seed_depth, tolerance=scene.contact.tolerance,
                                        max_iterations=scene.contact.max_iterations, mirror_y=prepared.half)
 
             try:
@@ -238,7 +208,13 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
             result.increments.append(record_increment(kind, state, iterations, history, model, prepared.factorization,
                                                       candidates, areas, lever, scene,
                                                       time.perf_counter() - step_start, multiplicity, substeps))
-            in_contact = int(np.count_nonzero(state.status != OPEN))
+            increment = result.increments[-1]
+            touching = state.status != OPEN
+            tangential = increment.displacement_full[model.top.dofs[candidates[touching], :2]]    # (k, 2)
+            slid = float(np.linalg.norm(tangential - np.asarray(increment.shift), axis=1).max(initial=0.0))
+            check_increment_limits(scene, increment.depth, slid, increment.contact_radius, len(result.increments),
+                                   result, warned)
+            in_contact = int(np.count_nonzero(touching))
             if in_contact < MIN_POINTS_PER_CONTACT * len(centers):
                 raise ContactUnderResolved(
                     f"increment {len(result.increments)} ({kind}): the contact covers only {in_contact} surface "
@@ -247,7 +223,7 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
                     f"{scene.mesh.size_contact} mm) or raise the load", result)
             if bar is not None:
                 bar.update(1)
-    except (PathNotCompleted, LoadNotCarried, ContactUnderResolved) as error:
+    except (PathNotCompleted, LoadNotCarried, ContactUnderResolved, PhysicalLimitError) as error:
         result.error = str(error)
         raise
     finally:

@@ -51,7 +51,7 @@ def bench_scene(n: int, kind: str, values, size_contact: float, size_base: float
         Load(LoadKind.TWIST, "displacement", tuple(values))
     return Scene(name=f"fingertip_{n}x{n}_{kind}", gel=fingertip_gel(n),
                  material=Material(YOUNGS_MODULUS, POISSONS_RATIO), body=BodySpec("plane"),
-                 contact=ContactSpec(mu=FRICTION),
+                 contact=ContactSpec(friction_coefficient=FRICTION),
                  mesh=MeshSettings(size_contact=size_contact, size_far=3.0, size_base=size_base),
                  loads=(Load(LoadKind.PRESS, "force", (NORMAL_FORCE,)), motion))
 

@@ -10,7 +10,8 @@ import numpy as np
 
 from fem.validation import check_positive, check_range
 
-__all__ = ["BlockMeshSpec", "graded_block_mesh", "mesh_quality", "MeshQuality", "quiet_skfem"]
+__all__ = ["BlockMeshSpec", "graded_block_mesh", "mesh_quality", "MeshQuality", "quiet_skfem", "size_cells",
+           "BISECTION_TETS_PER_CELL", "GMSH_TETS_PER_CELL", "NODES_PER_TET"]
 
 _TET_EDGES = np.array([[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]])
 
@@ -136,3 +137,33 @@ def mesh_quality(nodes: np.ndarray, tets: np.ndarray) -> MeshQuality:
     circumradius = np.linalg.norm(numerator, axis=1) / (12.0 * volume)
     return MeshQuality(float(dihedral.min()), float((3.0 * inradius / circumradius).min()),
                        int(tets.shape[1]), int(nodes.shape[1]))
+
+
+
+# tets per h^3 of volume (h the target edge length), measured with size_cells(): graded bisection of HCM-1's block
+# 4.8-8.3 x 6 (it halves edges, so most are shorter than their target), gmsh 0.65-0.75 x 6 on the Fig. 4 cap and the
+# 3x3 array; each taken near its upper end, so that the estimate errs toward too many
+BISECTION_TETS_PER_CELL = 50.0
+GMSH_TETS_PER_CELL = 4.5
+NODES_PER_TET = 0.2          # 3.9-5.4 tets per node on the same meshes
+
+
+def size_cells(target_size, centers, width: float, depth: float, height: float, smallest: float) -> float:
+    """Integral of 1 / h^3 over the gel [-], h = ``target_size`` (points (3, n) -> edge length [mm]): tets ~ a
+    mesher's constant times this. Without meshing, each first-contact point (``centers``, (k, 2) [mm] on z = 0)
+    takes an equal share of the footprint as a cylinder, integrated on rings and layers graded from ``smallest``
+    [mm] up, so that a fine zone of any size is resolved. Good to a factor of about 2: enough to refuse a mesh that
+    cannot fit the machine before making it."""
+    centers = np.asarray(centers, dtype=float).reshape(-1, 2)
+    radius = np.sqrt(width * depth / (np.pi * len(centers)))
+    r = np.concatenate([[0.0], np.geomspace(smallest / 20.0, radius, 400)])
+    z = np.concatenate([[0.0], np.geomspace(smallest / 20.0, height, 400)])
+    r_mid, z_mid = 0.5 * (r[1:] + r[:-1]), 0.5 * (z[1:] + z[:-1])
+    ring_volume = np.pi * np.diff(r**2)[:, None] * np.diff(z)[None, :]                  # (n_r, n_z)
+    rr, zz = np.meshgrid(r_mid, z_mid, indexing="ij")
+    total = 0.0
+    for cx, cy in centers:
+        points = np.stack([cx + rr.ravel(), np.full(rr.size, cy), -zz.ravel()])
+        size = np.asarray(target_size(points), dtype=float).reshape(rr.shape)
+        total += float((ring_volume / size**3).sum())
+    return total

@@ -1,4 +1,11 @@
-"""Command line: ``python -m studies NAME [--out DIR] [--quick] [study options]``; ``--help`` lists the studies."""
+"""Command line: ``python -m studies NAME [--out DIR] [--quick] [--debug] [study options]``; ``--help`` lists the
+studies.
+
+A bad input (a scene or sweep file, an option, an unwritable --out) or a load the gel cannot carry ends with a short
+message on stderr naming the file, key, value and what is allowed, and exit code 2; a solve that does not converge
+or a mesh that fails its quality check, exit code 1; no traceback unless ``--debug``. Warnings (small-strain
+limits, locking) are printed as one line each.
+"""
 
 from __future__ import annotations
 
@@ -6,9 +13,13 @@ import argparse
 import math
 import sys
 import time
+import warnings
 from pathlib import Path
 
 from studies._registry import find_studies
+
+EXIT_BAD_INPUT = 2          # argparse's own code for a bad command line
+EXIT_FAILED = 1
 
 
 def _first_line(module) -> str:
@@ -27,19 +38,52 @@ def build_parser() -> argparse.ArgumentParser:
                                   formatter_class=argparse.RawDescriptionHelpFormatter)
         sub.add_argument("--out", type=Path, default=Path("results"), help="output folder (default: results/)")
         sub.add_argument("--quick", action="store_true", help="coarse settings for a fast look")
+        sub.add_argument("--debug", action="store_true", help="show the Python traceback of an error")
         if hasattr(module, "add_arguments"):
             module.add_arguments(sub)
     return parser
 
 
+def _exit_code(error: BaseException) -> int | None:
+    """EXIT_BAD_INPUT for a bad input, EXIT_FAILED for a computation that failed, None for a bug (traceback)."""
+    from contact import ContactNotConverged, PathNotCompleted
+    from fem.tetmesh import MeshQualityError, MesherUnavailable
+
+    if isinstance(error, (ValueError, OSError, ConnectionError, ImportError)):
+        return EXIT_BAD_INPUT      # InputErrors, LoadNotCarried, ContactUnderResolved, files, --out, dask missing
+    if isinstance(error, (PathNotCompleted, ContactNotConverged, MeshQualityError, MesherUnavailable, MemoryError)):
+        return EXIT_FAILED
+    return None
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    print(f"warning: {message}", file=sys.stderr)
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Run one study; print where its outputs went, its largest error against theory and its wall time."""
+    """Run one study; print where its outputs went, its largest error against theory and its wall time.
+
+    Returns 0 on success, 2 for a bad input, 1 for a failed computation (the message on stderr)."""
     parser = build_parser()
     args = parser.parse_args(argv)
     module = find_studies()[args.study]
-    options = {k: v for k, v in vars(args).items() if k not in ("study", "out", "quick")}
+    options = {k: v for k, v in vars(args).items() if k not in ("study", "out", "quick", "debug")}
     start = time.perf_counter()
-    summary = module.run(args.out, quick=args.quick, **options) or {}
+    with warnings.catch_warnings():
+        if not args.debug:
+            warnings.showwarning = _show_warning
+        try:
+            summary = module.run(args.out, quick=args.quick, **options) or {}
+        except Exception as error:
+            code = _exit_code(error)
+            if args.debug or code is None:
+                raise
+            lines = str(error).splitlines() or [type(error).__name__]
+            head = f"{args.study}: error" + (f" ({len(lines)} problems)" if len(lines) > 1 else "")
+            print(f"{head}: {lines[0]}" if len(lines) == 1 else head + ":\n" + "\n".join(f"  {line}" for line in lines),
+                  file=sys.stderr)
+            print(f"{args.study}: (--debug shows the traceback)", file=sys.stderr)
+            return code
     seconds = time.perf_counter() - start
     print(f"{args.study}: outputs in {Path(args.out).resolve()}")
     max_error = summary.get("max_error") if isinstance(summary, dict) else None

@@ -55,7 +55,7 @@ def array_scene(size_contact: float, order: int = 1, n_shear: int = 1):
     shear_forces = tuple(float(final * k / n_shear) for k in range(1, n_shear + 1))
     base = tip.bench_scene(3, "shift", (0.1,), size_contact, tip.BENCH_SIZE_BASE)
     return dataclasses.replace(
-        base, contact=ContactSpec(mu=tip.FRICTION, frictionless_press=True),
+        base, contact=ContactSpec(friction_coefficient=tip.FRICTION, frictionless_press=True),
         mesh=MeshSettings(size_contact=size_contact, size_far=3.0, size_base=tip.BENCH_SIZE_BASE * order,
                           order=order),
         loads=(Load(LoadKind.PRESS, "force", (tip.NORMAL_FORCE,)), Load(LoadKind.SHEAR, "force", shear_forces)))

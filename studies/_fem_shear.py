@@ -16,7 +16,7 @@ def plate_shear_scene(name: str, gel: GelSpec, normal_force: float, load_ratios,
     """A rigid plate pressed on the gel with ``normal_force`` [N] (frictionless), then sheared along +x by force
     control to Q/(mu P) = each of ``load_ratios``."""
     return Scene(name=name, gel=gel, material=Material(E, NU), body=BodySpec("plane"),
-                 contact=ContactSpec(mu=MU, frictionless_press=True),
+                 contact=ContactSpec(friction_coefficient=MU, frictionless_press=True),
                  mesh=MeshSettings(size_contact=size_contact, size_far=size_far, fine_radius=fine_radius),
                  loads=(Load(LoadKind.PRESS, "force", (normal_force,)),
                         Load(LoadKind.SHEAR, "force", tuple(float(r * MU * normal_force) for r in load_ratios))))

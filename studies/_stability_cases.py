@@ -20,7 +20,7 @@ BASE = {
     "gel": {"shape": "block", "width": 20.0, "depth": 20.0, "thickness": 10.0},
     "material": {"E": 1.0, "nu": 0.45},
     "body": {"shape": "sphere", "radius": 10.0},
-    "contact": {"mu": 0.5, "frictionless_press": True},
+    "contact": {"friction_coefficient": 0.5, "frictionless_press": True},
     "mesh": {"size_contact": 0.15, "size_far": 4.0},
 }
 NORMAL_FORCE = 0.2          # N; Hertz a = 1.062 mm at E = 1 MPa, nu = 0.45, R = 10 mm
@@ -60,7 +60,7 @@ CASES = (
     *(StabilityCase("modulus", f"E={E:g} MPa, P={NORMAL_FORCE * E:g} N", (("material.E", E),), force_scale=E,
                     quick=E in (0.01, 1000.0))
       for E in (0.01, 0.1, 1.0, 10.0, 100.0, 1000.0)),
-    *(StabilityCase("friction", f"mu={mu:g}", (("contact.mu", mu),), quick=mu in (0.01, 2.0))
+    *(StabilityCase("friction", f"mu={mu:g}", (("contact.friction_coefficient", mu),), quick=mu in (0.01, 2.0))
       for mu in (0.01, 0.1, 0.5, 1.0, 2.0)),
     *(StabilityCase("load ratio", f"Q/(mu P)={r:g}", ratio=r, quick=r == 0.99) for r in (0.9, 0.95, 0.99)),
     StabilityCase("load ratio", "Q/(mu P)=1 (gross slip)", ratio=1.0, expect="error", quick=True),
@@ -105,7 +105,7 @@ def build_scene(case: StabilityCase, quick: bool):
     for key, value in case.changes:
         set_dotted(document, key, value)
     force = NORMAL_FORCE * case.force_scale
-    mu = document["contact"]["mu"]
+    mu = document["contact"]["friction_coefficient"]
     loads = [{"kind": "press", "force": force}]
     if case.load == "shear":
         path = [SHEAR_STEP, case.ratio] if case.ratio > SHEAR_STEP else [case.ratio]
@@ -135,7 +135,7 @@ def compare_with_theory(case: StabilityCase, document: dict, force: float, resul
     row = {"contact_radius": press.contact_radius, "contact_radius_hertz": a_hertz,
            "contact_radius_error": press.contact_radius / a_hertz - 1.0, "stick_ratio": last.stick_ratio}
     delta = 0.5 * document["mesh"]["size_contact"] / last.contact_radius
-    mu = document["contact"]["mu"]
+    mu = document["contact"]["friction_coefficient"]
     if case.load == "shear":
         ratio = math.hypot(*last.tangential_force) / (mu * last.normal_force)
         if ratio <= STEEP_LOAD_RATIO:

@@ -100,7 +100,7 @@ def _solve_one(case_id, parameters, document, prepared, group):
     except Exception as error:                    # recorded, and the sweep goes on (KeyboardInterrupt is not caught)
         record.update(status="failed", error=f"{type(error).__name__}: {error}")
     if result is not None:
-        record["increments"] = _increment_rows(result, scene.contact.mu)
+        record["increments"] = _increment_rows(result, scene.contact.friction_coefficient)
         record["timings"] = {k: float(v) for k, v in result.timings.items()}
         record["mesh_info"] = dict(result.mesh_info)
         bad = _non_finite(record["increments"])

@@ -10,7 +10,7 @@ A sweep file (TOML)::
     "material.E" = [0.5, 1.0, 2.0]
 
     [list]                                   # zipped: equal lengths, the i-th values form one point
-    "contact.mu" = [0.3, 0.5]
+    "contact.friction_coefficient" = [0.3, 0.5]
     "load.1.force" = [0.03, 0.05]            # [[load]] tables by index from 0
 
 Cases are the product of the grid with the zipped list (either may be absent, not both). An axis key is a dotted
@@ -28,14 +28,10 @@ import hashlib
 import itertools
 import json
 import math
-import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
+from fem.validation import InputErrors, describe
 
 __all__ = ["Output", "Case", "SweepSpec", "load_sweep", "sweep_from_dict", "increment_quantities",
            "CASE_QUANTITIES", "DERIVED_QUANTITIES", "set_dotted", "case_hash", "code_version"]
@@ -118,12 +114,20 @@ class SweepSpec:
         return tuple(key for key, _ in self.zipped)
 
 
-def set_dotted(document: dict, key: str, value) -> None:
-    """Set ``document[a][b]...`` from the dotted ``key`` ("material.E", "load.1.force"); lists are indexed by number."""
+def set_dotted(document: dict, key: str, value, check_only: bool = False) -> None:
+    """Set ``document[a][b]...`` from the dotted ``key`` ("material.E", "load.1.force"); lists are indexed by number.
+    ``check_only``: check the key's form (and a renamed key) without a document."""
+    from contact.scene import RENAMED_KEYS
+
     parts = key.split(".")
     if len(parts) < 2 or parts[0] not in SCENE_SECTIONS or not all(parts):
         raise ValueError(f"axis {key!r}: a key is SECTION.KEY with SECTION one of {list(SCENE_SECTIONS)}, or "
                          f"load.INDEX.KEY")
+    renamed = RENAMED_KEYS.get((parts[0], parts[-1])) if len(parts) == 2 else None
+    if renamed:
+        raise ValueError(f"axis {key!r} was renamed {parts[0]}.{renamed}: write \"{parts[0]}.{renamed}\"")
+    if check_only:
+        return
     node = document
     for depth, part in enumerate(parts[:-1]):
         where = ".".join(parts[: depth + 1])
@@ -141,45 +145,59 @@ def set_dotted(document: dict, key: str, value) -> None:
     node[parts[-1]] = value
 
 
-def _read_toml(path: Path, what: str) -> dict:
-    with path.open("rb") as stream:
-        try:
-            return tomllib.load(stream)
-        except tomllib.TOMLDecodeError as error:
-            raise ValueError(f"{what}: not valid TOML ({error})") from None
-
-
 def load_sweep(path: str | Path, quick: bool = False) -> SweepSpec:
-    """Read and validate a sweep file; every case's scene is built here, so a bad file fails before any solve."""
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"sweep file {str(path)!r} does not exist")
-    return sweep_from_dict(_read_toml(path, str(path)), base_dir=path.parent, quick=quick, source=str(path))
+    """Read and validate a sweep file; every case's scene is built here, so a bad file fails before any solve, with
+    every problem of the file at once (InputErrors, each line naming the file)."""
+    from contact.scene import read_toml_file
+
+    data = read_toml_file(path, "sweep file")
+    try:
+        return sweep_from_dict(data, base_dir=Path(path).parent, quick=quick, source=str(path))
+    except ValueError as error:
+        problems = error.problems if isinstance(error, InputErrors) else [str(error)]
+        raise InputErrors(f"{path}: {problem}" for problem in problems) from None
+
+
+MAX_CASE_PROBLEMS = 10      # bad cases listed one by one; the rest are counted
 
 
 def sweep_from_dict(data: dict, base_dir: str | Path = ".", quick: bool = False, source: str = "") -> SweepSpec:
-    """SweepSpec from a parsed sweep document; raises ValueError naming the offending key."""
-    unknown = sorted(set(data) - set(TOP_KEYS))
-    if unknown:
-        raise ValueError(f"unknown top-level key(s) {unknown} in the sweep file; allowed: {list(TOP_KEYS)}")
+    """SweepSpec from a parsed sweep document; raises InputErrors (a ValueError) with every problem, each naming
+    the offending key."""
+    problems: list[str] = []
+
+    def attempt(build, default=None):
+        try:
+            return build()
+        except ValueError as error:
+            problems.extend(error.problems if isinstance(error, InputErrors) else [str(error)])
+            return default
+
+    for key in sorted(set(data) - set(TOP_KEYS)):
+        problems.append(f"{key}: unknown top-level key in the sweep file; allowed: {list(TOP_KEYS)}")
     name = data.get("name", Path(source).stem if source else "sweep")
     if not isinstance(name, str) or not name:
-        raise ValueError(f"name={name!r} must be a non-empty string")
-    base = _base_document(data.get("scene"), Path(base_dir))
-    if quick:
+        problems.append(f"name={describe(name)} must be a non-empty string")
+    base = attempt(lambda: _base_document(data.get("scene"), Path(base_dir)))
+    if quick and base is not None:
         mesh = base.setdefault("mesh", {})
-        mesh["size_contact"] = max(float(mesh.get("size_contact", 0.0)), QUICK_SIZE_CONTACT)
-    grid = _axes(data.get("grid", {}), "grid")
-    zipped = _axes(data.get("list", {}), "list")
-    if not grid and not zipped:
-        raise ValueError("the sweep has no axes: give a [grid] and/or a [list] table of dotted keys")
+        mesh["size_contact"] = max(mesh.get("size_contact", 0.0), QUICK_SIZE_CONTACT)
+    grid = attempt(lambda: _axes(data.get("grid", {}), "grid"))
+    zipped = attempt(lambda: _axes(data.get("list", {}), "list"))
+    parsed_outputs = attempt(lambda: _parse_outputs(data.get("outputs")))
+    if grid == () and zipped == ():
+        problems.append("the sweep has no axes: give a [grid] and/or a [list] table of dotted keys")
+    grid, zipped = grid or (), zipped or ()
     both = sorted({k for k, _ in grid} & {k for k, _ in zipped})
     if both:
-        raise ValueError(f"axis {both[0]!r} is in both [grid] and [list]")
+        problems.append(f"axis {both[0]!r} is in both [grid] and [list]")
     lengths = {key: len(values) for key, values in zipped}
     if len(set(lengths.values())) > 1:
-        raise ValueError(f"[list] axes are zipped and need equal lengths, got {lengths}")
-    parsed_outputs = _parse_outputs(data.get("outputs"))
+        problems.append(f"[list] axes are zipped and need equal lengths, got {lengths}")
+    for key, _ in grid + zipped:
+        attempt(lambda key=key: set_dotted({}, key, None, check_only=True))
+    if problems:
+        raise InputErrors(problems)
     cases = _build_cases(base, grid, zipped)
     return SweepSpec(name=name, grid=grid, zipped=zipped, outputs=_expand_outputs(parsed_outputs, cases),
                      cases=tuple(cases), base_document=base, source=source)
@@ -187,24 +205,25 @@ def sweep_from_dict(data: dict, base_dir: str | Path = ".", quick: bool = False,
 
 def _base_document(scene, base_dir: Path) -> dict:
     """The base scene document: a path relative to the sweep file, or an inline table; validated as a scene."""
-    from contact.scene import scene_from_dict
+    from contact.scene import read_toml_file, scene_from_dict
 
     if scene is None:
         raise ValueError("scene is missing: give scene = \"path/to/scene.toml\" (relative to the sweep file) or an "
                          "inline [scene] table")
     if isinstance(scene, str):
-        path = (base_dir / scene).resolve()
-        if not path.is_file():
-            raise ValueError(f"scene={scene!r}: no such file {str(path)!r}")
-        document = _read_toml(path, f"scene={scene!r}")
+        try:
+            document = read_toml_file((base_dir / scene).resolve(), f"scene={scene!r}: file")
+        except OSError as error:                   # a problem of the sweep file: reported with the others
+            raise ValueError(str(error)) from None
     elif isinstance(scene, dict):
         document = copy.deepcopy(scene)
     else:
-        raise ValueError(f"scene must be a file path (string) or a [scene] table, got {type(scene).__name__}")
+        raise ValueError(f"scene={describe(scene)} must be a file path (string) or a [scene] table")
     try:
         scene_from_dict(copy.deepcopy(document))
     except ValueError as error:
-        raise ValueError(f"scene: {error}") from None
+        problems = error.problems if isinstance(error, InputErrors) else [str(error)]
+        raise InputErrors(f"scene: {problem}" for problem in problems) from None
     return document
 
 
@@ -296,24 +315,33 @@ def _points(grid, zipped) -> list[tuple[tuple[str, object], ...]]:
 
 
 def _build_cases(base: dict, grid, zipped) -> list[Case]:
+    """Every case's scene, built and checked; all bad cases reported at once (the first MAX_CASE_PROBLEMS in full)."""
     from contact.scene import scene_from_dict
 
-    cases, seen = [], {}
+    cases, seen, problems, bad_cases = [], {}, [], 0
     for parameters in _points(grid, zipped):
         document = copy.deepcopy(base)
-        for key, value in parameters:
-            set_dotted(document, key, copy.deepcopy(value))
         try:
+            for key, value in parameters:
+                set_dotted(document, key, copy.deepcopy(value))
             scene = scene_from_dict(copy.deepcopy(document))
         except ValueError as error:
-            axes = [key for key, _ in parameters]
-            raise ValueError(f"case {dict(parameters)} (axes {axes}): {error}") from None
+            bad_cases += 1
+            if bad_cases <= MAX_CASE_PROBLEMS:
+                lines = error.problems if isinstance(error, InputErrors) else [str(error)]
+                problems.extend(f"case {dict(parameters)}: {line}" for line in lines)
+            continue
         case_id = case_hash(document)
         if case_id in seen:
-            raise ValueError(f"cases {seen[case_id]} and {dict(parameters)} are the same scene: an axis repeats "
-                             f"a value")
+            problems.append(f"cases {seen[case_id]} and {dict(parameters)} are the same scene: an axis repeats "
+                            f"a value")
+            continue
         seen[case_id] = dict(parameters)
         cases.append(Case(case_id, parameters, document, scene))
+    if bad_cases > MAX_CASE_PROBLEMS:
+        problems.append(f"... and {bad_cases - MAX_CASE_PROBLEMS} more bad case(s)")
+    if problems:
+        raise InputErrors(problems)
     return cases
 
 

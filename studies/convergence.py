@@ -40,7 +40,7 @@ def solve_case(size_contact: float, order: int, n_shear: int) -> dict:
 
     scene = load_scene(SCENE)
     press, shear = scene.loads
-    force, mu = press.values[0], scene.contact.mu
+    force, mu = press.values[0], scene.contact.friction_coefficient
     final = max(shear.values)
     ratios = final / (mu * force) * np.arange(1, n_shear + 1) / n_shear
     scene = dataclasses.replace(

@@ -93,7 +93,7 @@ def _scene(plan: StudyPlan, name: str, loads, fine_radius: float):
     from controller.bench import FRICTION, POISSONS_RATIO, YOUNGS_MODULUS, fingertip_gel
 
     return Scene(name=name, gel=fingertip_gel(3), material=Material(YOUNGS_MODULUS, POISSONS_RATIO),
-                 body=BodySpec("plane"), contact=ContactSpec(mu=FRICTION),
+                 body=BodySpec("plane"), contact=ContactSpec(friction_coefficient=FRICTION),
                  mesh=MeshSettings(size_contact=plan.size_contact, size_far=plan.size_far, size_base=plan.size_base,
                                    fine_radius=fine_radius), loads=tuple(loads))
 

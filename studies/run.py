@@ -1,34 +1,43 @@
 """Run a scene file: press / shear / twist a rigid body on the gel; write result.json, steps.csv (and VTU files).
 
 Usage: ``python -m studies run studies/scenes/hcm1.toml --out results/hcm1 [--vtu] [--quiet]``.
+
+Nothing is lost and nothing stale survives: ``--out`` is checked writable before the solve, the outputs of an
+earlier run in it are removed first, and a run that fails (a load the contact cannot carry, a contact too small for
+the mesh, Newton not converging, a mesh that fails its check) still writes result.json with ``status = "failed"``,
+the error and every increment converged before it (and steps.csv, and the VTU files if asked).
 """
 
 from __future__ import annotations
 
+import os
+import socket
+import tempfile
 from pathlib import Path
-
-import numpy as np
 
 from studies._output import write_csv_atomic, write_json_atomic
 
 NAME = "run"
+OUTPUTS = ("result.json", "steps.csv")          # plus increment_NNN.vtu and increments.pvd with --vtu
 
 
 def add_arguments(parser) -> None:
     parser.add_argument("scene", type=Path, help="scene TOML file (see studies/scenes/hcm1.toml)")
-    parser.add_argument("--vtu", action="store_true", help="also write one VTU file per increment (ParaView)")
+    parser.add_argument("--vtu", action="store_true", help="also write one VTU file per increment and a .pvd time "
+                                                          "series (ParaView)")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
-def result_document(result) -> dict:
-    """The result.json content: mesh facts, timings, what was left out, and the per-increment table."""
-    timings = {k: v for k, v in result.timings.items()}
+def result_document(result, error: str | None = None) -> dict:
+    """The result.json content: status, mesh facts, timings, what was left out, the error, and the per-increment
+    table."""
     return {
         "scene": result.scene.name,
+        "status": "failed" if (error or result.error) else "ok",
         "mesh": result.mesh_info,
-        "timings": timings,
+        "timings": dict(result.timings),
         "left_out": result.left_out,
-        "error": result.error,
+        "error": error or result.error,
         "increments": [increment.summary() for increment in result.increments],
     }
 
@@ -48,33 +57,11 @@ def step_rows(result) -> list[dict]:
 
 
 def write_vtu(result, out_dir: Path) -> list[Path]:
-    """One VTU per increment: displacement [mm], contact state (-1 not a candidate, 0 open, 1 stick, 2 slip),
-    contact pressure and tangential traction [MPa] on the top points, nodal values on the mesh vertices."""
-    import meshio
+    """One VTU per increment and the .pvd time series over them (studies._paraview)."""
+    from studies._paraview import write_pvd, write_vtu as write_increments
 
-    model = result.model
-    mesh = model.mesh
-    n_vertices = mesh.p.shape[1]
-    vertex_dofs = model.basis.nodal_dofs.T                             # (n_vertices, 3)
-    top_vertex = model.top.dofs[:, 0]
-    dof_to_vertex = np.full(model.n_dofs, -1)
-    dof_to_vertex[vertex_dofs[:, 0]] = np.arange(n_vertices)
-    candidate_vertex = dof_to_vertex[top_vertex[result.candidates]]
-    on_vertex = candidate_vertex >= 0                                  # P2 midpoints are not mesh vertices
-    paths = []
-    for number, increment in enumerate(result.increments, start=1):
-        state = np.full(n_vertices, -1.0)
-        pressure = np.zeros(n_vertices)
-        traction = np.zeros((n_vertices, 3))
-        state[candidate_vertex[on_vertex]] = increment.status[on_vertex]
-        pressure[candidate_vertex[on_vertex]] = increment.pressure[on_vertex]
-        traction[candidate_vertex[on_vertex], :2] = increment.traction[on_vertex]
-        displacement = increment.displacement_full[vertex_dofs]
-        path = Path(out_dir) / f"increment_{number:03d}.vtu"
-        meshio.write(path, meshio.Mesh(mesh.p.T, [("tetra", mesh.t.T)],
-                                       point_data={"displacement": displacement, "contact_state": state,
-                                                   "contact_pressure": pressure, "tangential_traction": traction}))
-        paths.append(path)
+    paths = write_increments(result, out_dir)
+    write_pvd(paths, out_dir)
     return paths
 
 
@@ -84,16 +71,35 @@ def write_outputs(result, out_dir: Path, vtu: bool = False) -> None:
     out_dir.mkdir(parents=True, exist_ok=True)
     write_json_atomic(out_dir / "result.json", result_document(result))
     write_csv_atomic(out_dir / "steps.csv", step_rows(result))
-    if vtu:
+    if vtu and result.increments:
         write_vtu(result, out_dir)
 
 
+def prepare_out_dir(out_dir: Path) -> Path:
+    """Create ``out_dir``, check that a file can be written there, and remove an earlier run's outputs."""
+    out_dir = Path(out_dir)
+    if out_dir.exists() and not out_dir.is_dir():
+        raise NotADirectoryError(f"--out {str(out_dir)!r} is a file, not a folder")
+    try:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        handle, probe = tempfile.mkstemp(dir=out_dir, prefix=f".write-test-{socket.gethostname()}-{os.getpid()}.")
+        os.close(handle)
+        os.unlink(probe)
+    except OSError as error:
+        raise PermissionError(f"--out {str(out_dir)!r} is not writable: {error.strerror or error}") from None
+    for path in [out_dir / name for name in OUTPUTS] + sorted(out_dir.glob("increment_[0-9][0-9][0-9].vtu")) \
+            + [out_dir / "increments.pvd"]:
+        path.unlink(missing_ok=True)
+    return out_dir
+
+
 def run(out_dir, quick: bool = False, scene: Path | None = None, vtu: bool = False, quiet: bool = False) -> dict:
-    """Solve the scene's load path and write its outputs; a failed increment still leaves the converged ones."""
+    """Solve the scene's load path and write its outputs; a failed run still leaves the converged increments."""
     import dataclasses
 
+    from contact.result import ContactUnderResolved, LoadNotCarried, PathNotCompleted
     from contact.scene import load_scene
-    from contact.solver import PathNotCompleted, solve_scene
+    from contact.solver import solve_scene
 
     if scene is None:
         raise ValueError("run needs a scene file: python -m studies run SCENE.toml")
@@ -101,10 +107,16 @@ def run(out_dir, quick: bool = False, scene: Path | None = None, vtu: bool = Fal
     if quick:
         problem = dataclasses.replace(problem, mesh=dataclasses.replace(
             problem.mesh, size_contact=max(problem.mesh.size_contact, 0.25)))
+    out_dir = prepare_out_dir(out_dir)
     try:
         result = solve_scene(problem, progress=not quiet)
-    except PathNotCompleted as error:
+    except (PathNotCompleted, LoadNotCarried, ContactUnderResolved) as error:
         write_outputs(error.result, out_dir, vtu)
+        raise
+    except Exception as error:              # before any increment (mesh, memory, limits): the error on disk too
+        write_json_atomic(out_dir / "result.json", {"scene": problem.name, "status": "failed", "mesh": {},
+                                                    "timings": {}, "left_out": [],
+                                                    "error": f"{type(error).__name__}: {error}", "increments": []})
         raise
     write_outputs(result, out_dir, vtu)
     if not quiet:

@@ -20,7 +20,7 @@ H = 0.2                                 # mm, CI-size element; a ~ 1.1 mm, so h 
 
 def scene(nu, loads, h=H, frictionless_press=True, mu=MU, **contact):
     return Scene(name="test", material=Material(E, nu), mesh=MeshSettings(size_contact=h),
-                 contact=ContactSpec(mu=mu, frictionless_press=frictionless_press, **contact), loads=loads)
+                 contact=ContactSpec(friction_coefficient=mu, frictionless_press=frictionless_press, **contact), loads=loads)
 
 
 def half_space(nu):

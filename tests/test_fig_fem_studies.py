@@ -59,7 +59,7 @@ def plate_on_cap(size_contact):
     gel = GelSpec("cap", (("width", 20.0), ("depth", 20.0), ("base_thickness", 8.0), ("cap_radius", 4.0),
                           ("sphere_radius", 10.0)))
     return Scene(name="cap", gel=gel, material=Material(1.0, 0.3), body=BodySpec("plane"),
-                 contact=ContactSpec(mu=0.5), mesh=MeshSettings(size_contact=size_contact, size_far=3.0),
+                 contact=ContactSpec(friction_coefficient=0.5), mesh=MeshSettings(size_contact=size_contact, size_far=3.0),
                  loads=(Load(LoadKind.PRESS, "force", (0.2,)),))
 
 

@@ -175,7 +175,7 @@ def contact_scene(volumetric: str) -> Scene:
              Load(LoadKind.SHEAR, "force", tuple(r * MU * FORCE for r in SHEAR_RATIOS)))
     return Scene(name="incompressible", gel=GelSpec(parameters=(("width", 20.0), ("depth", 20.0), ("thickness", 10.0))),
                  material=Material(E, NU_CONTACT), mesh=MeshSettings(size_contact=H, volumetric=volumetric),
-                 contact=ContactSpec(mu=MU, frictionless_press=True), loads=loads)
+                 contact=ContactSpec(friction_coefficient=MU, frictionless_press=True), loads=loads)
 
 
 @pytest.fixture(scope="module")

@@ -35,7 +35,7 @@ def test_expected_errors_are_clear(quick_rows):
     messages = {row["case"]: row["message"] for row in quick_rows if row["expect"] == "error"}
     assert all(messages.values()), messages
     assert "material.nu=0.5 outside allowed range" in messages["nu=0.5 (excluded)"]
-    assert "not below mu*P" in messages["Q/(mu P)=1 (gross slip)"]
+    assert "not below friction_coefficient x P" in messages["Q/(mu P)=1 (gross slip)"]
 
 
 def test_modulus_contrast_is_scale_invariant(quick_rows):

@@ -24,7 +24,7 @@ nu = 0.45
 shape = "sphere"
 radius = 10.0
 [contact]
-mu = 0.5
+friction_coefficient = 0.5
 {contact_extra}
 [mesh]
 size_contact = 0.35
@@ -69,15 +69,13 @@ def test_run_writes_json_csv_and_vtu(tmp_path):
 
 
 def test_failed_increment_keeps_the_converged_ones_on_disk(tmp_path, failing_after_press):
-    from contact.solver import PathNotCompleted
-    from studies.__main__ import main
+    from studies.__main__ import EXIT_FAILED, main
 
     scene = tmp_path / "small.toml"
     scene.write_text(SMALL_SCENE.format(contact_extra=""))
-    with pytest.raises(PathNotCompleted):
-        main(["run", str(scene), "--out", str(tmp_path / "out"), "--quiet"])
+    assert main(["run", str(scene), "--out", str(tmp_path / "out"), "--quiet"]) == EXIT_FAILED
     document = json.loads((tmp_path / "out" / "result.json").read_text())
-    assert document["error"] and "residual history" in document["error"]
+    assert document["status"] == "failed" and "residual history" in document["error"]
     assert [inc["load_kind"] for inc in document["increments"]] == ["press"]
 
 

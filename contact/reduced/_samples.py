@@ -137,7 +137,7 @@ class PathSamples:
                       "fine_radius": result.mesh_info.get("fine_radius"), "dofs": result.mesh_info.get("dofs"),
                       "free_dofs": result.mesh_info.get("free_dofs"), "elements": result.mesh_info.get("elements")}
         return cls(
-            case=case or scene.name, friction=float(scene.contact.mu),
+            case=case or scene.name, friction=float(scene.contact.friction_coefficient),
             load_kind=np.array([inc.load_kind for inc in increments]),
             normal_force=np.array([inc.normal_force for inc in increments]),
             depth=np.array([inc.depth for inc in increments]),

@@ -6,14 +6,7 @@ import math
 
 import numpy as np
 
-__all__ = ["arc_points", "box_solid", "revolved_solid", "union_surface", "check_integer"]
-
-
-def check_integer(name: str, value, low: int, high: int) -> int:
-    """Return ``int(value)`` if it is an integer in [low, high], else raise ValueError naming it."""
-    if isinstance(value, bool) or not float(value).is_integer() or not low <= value <= high:
-        raise ValueError(f"{name}={value!r} outside allowed range [{low}, {high}] (an integer)")
-    return int(value)
+__all__ = ["arc_points", "box_solid", "revolved_solid", "union_surface"]
 
 
 def arc_points(center_r: float, center_z: float, radius: float, angle_start: float, angle_end: float,

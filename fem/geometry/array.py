@@ -7,8 +7,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from fem.geometry._surface import arc_points, box_solid, check_integer, revolved_solid, union_surface
-from fem.validation import check_positive, check_range
+from fem.geometry._surface import arc_points, box_solid, revolved_solid, union_surface
+from fem.validation import check_all, check_integer, check_positive, check_range
 
 __all__ = ["ArrayGeometry"]
 
@@ -47,11 +47,11 @@ class ArrayGeometry:
     fillet: float = 0.0
 
     def __post_init__(self):
-        check_integer("rows", self.rows, 1, MAX_BUMPS_PER_SIDE)
-        check_integer("cols", self.cols, 1, MAX_BUMPS_PER_SIDE)
-        for name in ("bump_radius", "pitch", "base_width", "base_depth", "base_thickness"):
-            check_positive(name, getattr(self, name), "mm")
-        check_range("fillet", self.fillet, 0.0, math.inf, "mm", high_open=True)
+        check_all(lambda: check_integer("rows", self.rows, 1, MAX_BUMPS_PER_SIDE),
+                  lambda: check_integer("cols", self.cols, 1, MAX_BUMPS_PER_SIDE),
+                  *[lambda name=name: check_positive(name, getattr(self, name), "mm")
+                    for name in ("bump_radius", "pitch", "base_width", "base_depth", "base_thickness")],
+                  lambda: check_range("fillet", self.fillet, 0.0, math.inf, "mm", high_open=True))
         footprint = self.footprint_radius
         if max(self.rows, self.cols) > 1:
             check_range("pitch", self.pitch, 2.0 * footprint, math.inf,

@@ -13,7 +13,7 @@ import numpy as np
 from scipy.integrate import quad
 
 from fem.geometry._surface import arc_points, box_solid, revolved_solid, union_surface
-from fem.validation import check_positive, check_range
+from fem.validation import check_all, check_positive, check_range
 
 __all__ = ["BlockGeometry", "CapGeometry", "FlatCapGeometry"]
 
@@ -29,8 +29,8 @@ class BlockGeometry:
     thickness: float = 10.0
 
     def __post_init__(self):
-        for name in ("width", "depth", "thickness"):
-            check_positive(name, getattr(self, name), "mm")
+        check_all(*[lambda name=name: check_positive(name, getattr(self, name), "mm")
+                    for name in ("width", "depth", "thickness")])
 
     @property
     def height(self) -> float:
@@ -69,8 +69,8 @@ class _CapOnBase:
     """
 
     def _check_base(self):
-        for name in ("width", "depth", "base_thickness", "cap_radius"):
-            check_positive(name, getattr(self, name), "mm")
+        check_all(*[lambda name=name: check_positive(name, getattr(self, name), "mm")
+                    for name in ("width", "depth", "base_thickness", "cap_radius")])
         narrowest = min(self.width, self.depth)
         check_range("cap_radius", self.cap_radius, 0.0, narrowest / 2, "mm (the cap must fit inside the base)",
                     low_open=True, high_open=True)
@@ -141,13 +141,17 @@ class CapGeometry(_CapOnBase):
     power_law_height: float | None = None
 
     def __post_init__(self):
-        self._check_base()
+        check_all(self._check_base, self._check_profile)
+        if self.exponent is None:
+            check_range("cap_radius", self.cap_radius, 0.0, self.sphere_radius,
+                        "mm (a spherical cap is at most a hemisphere: cap_radius <= sphere_radius)", low_open=True)
+
+    def _check_profile(self):
         if self.exponent is None:
             if self.power_law_height is not None:
                 raise ValueError(f"power_law_height={self.power_law_height!r} needs an exponent; a spherical cap "
                                  "takes its height from sphere_radius")
-            check_range("cap_radius", self.cap_radius, 0.0, self.sphere_radius,
-                        "mm (a spherical cap is at most a hemisphere: cap_radius <= sphere_radius)", low_open=True)
+            check_positive("sphere_radius", self.sphere_radius, "mm")
         else:
             check_range("exponent", self.exponent, 1.0, 64.0)
             if self.power_law_height is None:
@@ -234,8 +238,8 @@ class FlatCapGeometry(_CapOnBase):
     edge_radius: float = 10.0
 
     def __post_init__(self):
-        self._check_base()
-        check_positive("edge_radius", self.edge_radius, "mm")
+        check_all(self._check_base, lambda: check_positive("edge_radius", self.edge_radius, "mm"),
+                  lambda: check_range("flat_radius", self.flat_radius, 0.0, math.inf, "mm", high_open=True))
         check_range("flat_radius", self.flat_radius, 0.0, self.cap_radius, "mm (below cap_radius)",
                     high_open=True)
         check_range("cap_radius", self.cap_radius, self.flat_radius, self.flat_radius + self.edge_radius,

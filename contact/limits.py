@@ -1,0 +1,228 @@
+"""Limits checked before and while solving: what the linear, small-strain, small-sliding model can answer, and what
+the machine can hold.
+
+Before meshing (``check_scene_limits``, ``check_resources``), from closed-form estimates of the largest press:
+- small strain: indentation d against the gel's thickness H under the contact; past SMALL_STRAIN_WARN a warning,
+  past SMALL_STRAIN_REFUSE refused (a linear gel pressed through half its thickness says nothing);
+- a small contact against the curvature: Hertz needs a << R; past CONTACT_WIDTH_WARN a warning, a >= R refused;
+- size: the tets, DOF and memory of the mesh the settings ask for (``fem.mesh.size_cells``), refused when the
+  estimate exceeds the memory this machine has available.
+While solving (``check_increment_limits``), on each converged increment: the computed depth against the thickness
+(same thresholds) and, for a sphere, the distance a contact point has slid against the contact radius (the gap is
+paired at the start: small sliding); past SLIDING_WARN a warning, past SLIDING_REFUSE refused.
+A refusal is ``PhysicalLimitError`` (a ValueError); a warning is ``PhysicalLimitWarning``.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import warnings
+
+import numpy as np
+
+from contact.scene import BodyShape, GelShape, LoadKind, Scene
+
+__all__ = ["PhysicalLimitError", "PhysicalLimitWarning", "check_scene_limits", "check_increment_limits",
+           "check_resources", "estimate_resources", "contact_centers", "estimated_contact",
+           "SMALL_STRAIN_WARN", "SMALL_STRAIN_REFUSE", "CONTACT_WIDTH_WARN", "CONTACT_WIDTH_REFUSE", "SLIDING_WARN",
+           "SLIDING_REFUSE"]
+
+SMALL_STRAIN_WARN = 0.1      # d / H: the linear answer's error grows with the strain, ~10 % here
+SMALL_STRAIN_REFUSE = 0.5    # d / H: half the thickness pressed away; a linear gel says nothing there
+CONTACT_WIDTH_WARN = 0.3     # a / R: the paraboloid of Hertz differs from the sphere by (a/R)^2 / 4 ~ 2 % at the rim
+CONTACT_WIDTH_REFUSE = 1.0   # a / R: a contact wider than the sphere's radius has no small-strain meaning
+SLIDING_WARN = 0.1           # slid distance / a: the gap paired at the start is off by about this fraction of d
+SLIDING_REFUSE = 0.5         # slid distance / a: half the contact has moved onto other body points
+BYTES_PER_FACTOR_DOF = 1.36e9 / 52.9e3**(4 / 3)    # HCM-1 as written: 52.9k DOF, peak 1.36 GB; factor fill ~ n^(4/3)
+
+
+class PhysicalLimitError(ValueError):
+    """The scene asks what the model cannot answer (or the machine cannot hold); ``result`` keeps the increments
+    converged before (None when refused before the solve)."""
+
+    def __init__(self, message: str, result=None):
+        super().__init__(message)
+        self.result = result
+
+
+class PhysicalLimitWarning(UserWarning):
+    """Past a stated threshold of small strain or small sliding: the answer is less accurate than usual."""
+
+
+def _max_normal_load(scene: Scene) -> tuple[float | None, float | None]:
+    forces = [v for load in scene.loads if load.kind == LoadKind.PRESS and load.control == "force" for v in load.values]
+    depths = [v for load in scene.loads if load.kind == LoadKind.PRESS and load.control == "displacement"
+              for v in load.values]
+    return (max(forces) if forces else None), (max(depths) if depths else None)
+
+
+def contact_centers(scene: Scene) -> np.ndarray:
+    """Where the body first touches the gel, (k, 2) [mm]: below a sphere's centre, or every bump top for a plane."""
+    if scene.body.shape == "sphere":
+        return np.array([scene.body.center], dtype=float)
+    return np.asarray(scene.gel.geometry.contact_centers(), dtype=float).reshape(-1, 2)
+
+
+def estimated_contact(scene: Scene) -> tuple[float, float]:
+    """Half-space estimate of the contact radius [mm] and indentation [mm] at each contact centre, largest press.
+
+    Curved contacts (sphere body or curved gel) use Hertz with 1/R = 1/R_body + 1/R_gel and the normal force shared
+    equally by the contact centres; a flat-topped cap under a plane acts as a flat punch of its flat radius; a
+    plane on a flat block covers the whole top. Only used to size the fine zone and to seed the first press.
+    """
+    force, depth = _max_normal_load(scene)
+    e_star = scene.material.effective_modulus
+    n_centers = len(contact_centers(scene))
+    body_radius = scene.body.radius if scene.body.shape == "sphere" else math.inf
+    curvature = 1.0 / body_radius + 1.0 / scene.gel.curvature_radius
+    if curvature > 0.0:
+        radius = 1.0 / curvature
+        from_force = (3.0 * (force or 0.0) / n_centers * radius / (4.0 * e_star)) ** (1 / 3)
+        contact_radius = max(from_force, math.sqrt(radius * depth) if depth else 0.0)
+        return contact_radius, contact_radius**2 / radius
+    if scene.gel.shape == "flat_cap":
+        flat = scene.gel.geometry.flat_radius
+        indentation = max(depth or 0.0, (force or 0.0) / n_centers / (2.0 * e_star * flat))
+        return flat + math.sqrt(2.0 * scene.gel.geometry.edge_radius * indentation), indentation
+    half_diagonal = 0.5 * math.hypot(scene.gel.width, scene.gel.depth)
+    return half_diagonal, depth or 1e-3 * scene.gel.thickness
+
+
+def _contact_curvature_radius(scene: Scene) -> float:
+    """Effective radius R [mm] of the first contact, 1/R = 1/R_body + 1/R_gel (inf for flat on flat)."""
+    body_radius = scene.body.radius if scene.body.shape == BodyShape.SPHERE else math.inf
+    curvature = 1.0 / body_radius + 1.0 / scene.gel.curvature_radius
+    return 1.0 / curvature if curvature > 0.0 else math.inf
+
+
+def _estimated_depth(scene: Scene) -> float:
+    """Indentation [mm] of the largest press: given (depth), Hertz / flat punch, or a plane pressing a block's whole
+    top (uniform compression P H / (E W D))."""
+    force, depth = _max_normal_load(scene)
+    if depth is not None and force is None:
+        return depth
+    if scene.gel.shape == GelShape.BLOCK and scene.body.shape == BodyShape.PLANE:
+        from_force = force * scene.gel.thickness / (scene.material.E * scene.gel.width * scene.gel.depth)
+        return max(from_force, depth or 0.0)
+    return estimated_contact(scene)[1]
+
+
+def check_scene_limits(scene: Scene) -> list[str]:
+    """Warn (PhysicalLimitWarning) past the small-strain and contact-width thresholds and refuse
+    (PhysicalLimitError) past their limits, from closed-form estimates of the largest press; returns the warnings."""
+    thickness = scene.gel.thickness_under_contact
+    depth = _estimated_depth(scene)
+    strain = depth / thickness
+    problems, notes = [], []
+    if not math.isfinite(strain) or strain >= SMALL_STRAIN_REFUSE:
+        problems.append(f"the largest press would indent the gel about {depth:.3g} mm into its {thickness:g} mm "
+                        f"(d/H = {strain:.3g}, half-space estimate): past d/H = {SMALL_STRAIN_REFUSE} a linear, "
+                        f"small-strain gel means nothing; lower the press")
+    elif strain > SMALL_STRAIN_WARN:
+        notes.append(f"the largest press indents the gel about {depth:.3g} mm into its {thickness:g} mm (d/H = "
+                     f"{strain:.2f} > {SMALL_STRAIN_WARN}): past small strain, the linear answer is less accurate")
+    radius = _contact_curvature_radius(scene)
+    if math.isfinite(radius):
+        contact_radius = estimated_contact(scene)[0]
+        width = contact_radius / radius
+        if not math.isfinite(width) or width >= CONTACT_WIDTH_REFUSE:
+            problems.append(f"the contact radius would be about {contact_radius:.3g} mm on a curvature radius of "
+                            f"{radius:.3g} mm (a/R = {width:.3g} >= {CONTACT_WIDTH_REFUSE}): not a small contact; "
+                            f"lower the press")
+        elif width > CONTACT_WIDTH_WARN:
+            notes.append(f"contact radius about {contact_radius:.3g} mm on a curvature radius of {radius:.3g} mm "
+                         f"(a/R = {width:.2f} > {CONTACT_WIDTH_WARN}): Hertz's small-contact assumption is stretched")
+    if problems:
+        raise PhysicalLimitError("; ".join(problems))
+    for note in notes:
+        warnings.warn(note, PhysicalLimitWarning, stacklevel=3)
+    return notes
+
+
+def check_increment_limits(scene: Scene, depth: float, slid: float, contact_radius: float, number: int, result,
+                           warned: set) -> None:
+    """After a converged increment: the computed ``depth`` [mm] against the thickness, and (a sphere) the largest
+    distance ``slid`` [mm] by a contact point against the contact radius [mm]; warn once per kind, refuse past the
+    limits (PhysicalLimitError keeping ``result``)."""
+    thickness = scene.gel.thickness_under_contact
+    strain = depth / thickness
+    if strain >= SMALL_STRAIN_REFUSE:
+        raise PhysicalLimitError(f"increment {number}: the body is {depth:.3g} mm into the {thickness:g} mm gel "
+                                 f"(d/H = {strain:.3g} >= {SMALL_STRAIN_REFUSE}): past small strain, refused", result)
+    if strain > SMALL_STRAIN_WARN and "strain" not in warned:
+        warned.add("strain")
+        warnings.warn(f"increment {number}: depth {depth:.3g} mm of the {thickness:g} mm gel (d/H = {strain:.2f} > "
+                      f"{SMALL_STRAIN_WARN}): past small strain", PhysicalLimitWarning, stacklevel=3)
+    if scene.body.shape != BodyShape.SPHERE or contact_radius <= 0.0:
+        return                                   # a plane slides along itself, and a sphere twists in place
+    sliding = slid / contact_radius
+    if sliding >= SLIDING_REFUSE:
+        raise PhysicalLimitError(f"increment {number}: a contact point has slid {slid:.3g} mm, {sliding:.2f} of the "
+                                 f"contact radius {contact_radius:.3g} mm (>= {SLIDING_REFUSE}): the contact is "
+                                 f"paired at the start (small sliding), refused; shift less", result)
+    if sliding > SLIDING_WARN and "sliding" not in warned:
+        warned.add("sliding")
+        warnings.warn(f"increment {number}: a contact point has slid {slid:.3g} mm, {sliding:.2f} of the contact "
+                      f"radius (> {SLIDING_WARN}): the small-sliding gap is approximate", PhysicalLimitWarning,
+                      stacklevel=3)
+
+
+def _available_memory() -> float | None:
+    """Bytes of memory available to a new allocation (MemAvailable on Linux), None where unknown."""
+    try:
+        with open("/proc/meminfo") as stream:
+            for line in stream:
+                if line.startswith("MemAvailable:"):
+                    return float(line.split()[1]) * 1024.0
+    except OSError:
+        pass
+    try:
+        return float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_AVPHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def estimate_resources(scene: Scene, fine_radius: float, half: bool) -> dict:
+    """Estimated tets, nodes, DOF and peak memory [bytes] of the scene's mesh and solve, before meshing (factor ~2)."""
+    from fem.mesh import BISECTION_TETS_PER_CELL, GMSH_TETS_PER_CELL, NODES_PER_TET, size_cells
+
+    size_contact = scene.mesh.size_contact * scene.mesh.order
+    geometry = scene.gel.geometry
+    if scene.gel.shape == GelShape.BLOCK:
+        from fem.mesh import BlockMeshSpec
+
+        spec = BlockMeshSpec(width=geometry.width, depth=geometry.depth, thickness=geometry.thickness,
+                             size_contact=min(size_contact, scene.mesh.size_far), size_far=scene.mesh.size_far,
+                             fine_radius=fine_radius, fine_center=tuple(scene.body.center), grading=scene.mesh.grading)
+        cells = size_cells(spec.target_size, [scene.body.center], geometry.width, geometry.depth / (2 if half else 1),
+                           geometry.thickness, spec.size_contact)
+        tets = BISECTION_TETS_PER_CELL * cells
+    else:
+        from fem.tetmesh import TetMeshSpec, _sizing
+
+        spec = TetMeshSpec(size_contact=size_contact, size_far=max(scene.mesh.size_far, size_contact),
+                           contact_radius=fine_radius, grading=scene.mesh.grading, size_base=scene.mesh.size_base)
+        sizing = _sizing(geometry, spec)
+        cells = size_cells(sizing.edge_length, sizing.centers, sizing.width, sizing.depth, geometry.height,
+                           size_contact)
+        tets = GMSH_TETS_PER_CELL * cells
+    nodes = NODES_PER_TET * tets * (8.0 if scene.mesh.order == 2 else 1.0)     # + one node per edge (~7 per node)
+    dofs = 3.0 * nodes
+    surface_points = (math.pi * (fine_radius + 3.0 * scene.mesh.size_contact) ** 2 * len(contact_centers(scene))
+                      / (0.5 * scene.mesh.size_contact**2) / (2 if half else 1))
+    compliance_bytes = 8.0 * (3.0 * surface_points) ** 2                   # dense surface compliance, worst case
+    return {"tets": tets, "nodes": nodes, "dofs": dofs, "surface_points": surface_points,
+            "bytes": BYTES_PER_FACTOR_DOF * dofs ** (4.0 / 3.0) + compliance_bytes}
+
+
+def check_resources(scene: Scene, fine_radius: float, half: bool) -> dict:
+    """Refuse (PhysicalLimitError) a mesh whose estimated memory exceeds what this machine has available."""
+    estimate = estimate_resources(scene, fine_radius, half)
+    available = _available_memory()
+    if available is not None and estimate["bytes"] > available:
+        raise PhysicalLimitError(
+            f"mesh.size_contact={scene.mesh.size_contact} mm (order {scene.mesh.order}) would make about "
+            f"{estimate['tets']:.2g} tets, {estimate['dofs']:.2g} DOF and need about {estimate['bytes'] / 1e9:.3g} GB; "
+            f"this machine has {available / 1e9:.3g} GB available: raise mesh.size_contact or mesh.size_far")
+    return estimate
