@@ -134,7 +134,7 @@ def check_scene_limits(scene: Scene) -> list[str]:
             notes.append(f"contact radius about {contact_radius:.3g} mm on a curvature radius of {radius:.3g} mm "
                          f"(a/R = {width:.2f} > {CONTACT_WIDTH_WARN}): Hertz's small-contact assumption is stretched")
     if problems:
-        raise PhysicalLimitError("; ".join(problems))
+        raise PhysicalLimitError("\n".join(problems))
     for note in notes:
         warnings.warn(note, PhysicalLimitWarning, stacklevel=3)
     return notes

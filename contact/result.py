@@ -107,7 +107,7 @@ def record_increment(kind, state: ContactState, iterations, history, model, fact
     status = state.status
     contact_area = multiplicity * float(areas[status != OPEN].sum())
     stick_area = multiplicity * float(areas[status == STICK].sum())
-    pressure = state.normal_force / areas
+    pressure = model.top.pressure(candidates, state.normal_force)      # P2: recovered per facet (fem.elasticity)
     traction = state.tangential_force / areas[:, None]
     # full field: one back-substitution with the contact forces (also gives the base reactions for the sensor)
     forces = np.zeros(model.n_dofs)

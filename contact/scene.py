@@ -394,7 +394,8 @@ def scene_from_dict(data: dict) -> Scene:
     for required in ("gel", "material", "body", "load"):
         if required not in data:
             problems.append(f"scene is missing [{required}]" if required != "load" else "scene is missing [[load]]")
-    parts = {key: attempt(lambda key=key, cls=cls: _build(cls, data.get(key, {}), key)) for key, cls in SECTIONS.items()}
+    parts = {key: attempt(lambda key=key, cls=cls: _build(cls, data.get(key, {}), key))
+             for key, cls in SECTIONS.items()}
 
     def gel():
         table = data["gel"]

@@ -97,12 +97,41 @@ class SaddlePointBlocks:
 
 @dataclass
 class SurfacePoints:
-    """Nodes of a flat face: positions (n, 3) [mm], dof indices (n, 3) into the full vector, tributary areas [mm^2]."""
+    """Nodes of a flat face: positions (n, 3) [mm], dof indices (n, 3) into the full vector, tributary areas [mm^2].
+
+    ``patches`` (P2 only): sparse (n, n_facets) share of each point's tributary area in each mesh facet, from which
+    ``pressure`` recovers a nodal pressure that is exact for uniform pressure (see there).
+    """
 
     positions: np.ndarray
     dofs: np.ndarray
     areas: np.ndarray
     triangles: np.ndarray      # (n_tri, 3) indices into positions: the face split into flat triangles
+    patches: sp.csr_matrix | None = None
+
+    def pressure(self, points: np.ndarray, normal_forces: np.ndarray) -> np.ndarray:
+        """Nodal pressure [MPa] at ``points`` (indices) from their normal forces [N] (0 elsewhere).
+
+        P1: force / tributary area. P2: the forces that balance a uniform pressure p are the consistent ones,
+        p A/3 on each edge midpoint of a facet of area A and none on its vertices, while the four-triangle split
+        gives a midpoint A/4 and a vertex A/12: force / area would read 4/3 p and 0. So each facet's pressure is
+        taken as the force its points put on it (each point's force shared in proportion to its area in the
+        facet) over its area, and a point's pressure as that of the facets around it, area-weighted: p exactly
+        for a uniform p, on vertices and midpoints alike. Points without force read 0, unless every facet around
+        them is loaded (P2 vertices inside the contact carry almost no force).
+        """
+        if self.patches is None:
+            return normal_forces / self.areas[points]
+        forces = np.zeros(self.areas.size)
+        forces[points] = normal_forces
+        share = self.patches.multiply(1.0 / self.areas[:, None]).tocsr()         # (n, n_facets) area fractions
+        facet_force = share.T @ forces                                           # (n_facets,)
+        facet_area = np.asarray(self.patches.sum(axis=0)).ravel()
+        touching = (self.patches[points] > 0).astype(float)                      # (k, n_facets)
+        pressure = (touching @ facet_force) / (touching @ facet_area)
+        loaded_facets = touching @ (facet_force > 0.0)                          # (k,) facets with force
+        inside = loaded_facets == np.asarray(touching.sum(axis=1)).ravel()     # every facet around is loaded
+        return np.where((normal_forces > 0.0) | inside, pressure, 0.0)
 
 
 @dataclass
@@ -186,7 +215,12 @@ def _face_points(basis: Basis, order: int, face_facets: np.ndarray) -> SurfacePo
     corners = xyz[local]                                                # (n_tri, 3, 3)
     tri_area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
     areas = np.bincount(local.ravel(), weights=np.repeat(tri_area / 3.0, 3), minlength=point_ids.size)
-    return SurfacePoints(positions=xyz, dofs=dof_table, areas=areas, triangles=local)
+    patches = None
+    if order != 1:                            # sub-triangle k of the 4 belongs to facet k mod n_facets
+        facet = np.tile(np.arange(len(vertex_tri)), 4)
+        patches = sp.coo_matrix((np.repeat(tri_area / 3.0, 3), (local.ravel(), np.repeat(facet, 3))),
+                                shape=(point_ids.size, len(vertex_tri))).tocsr()
+    return SurfacePoints(positions=xyz, dofs=dof_table, areas=areas, triangles=local, patches=patches)
 
 
 def _assemble(basis: Basis, youngs_modulus: float, poissons_ratio: float, volumetric: str):

@@ -44,23 +44,32 @@ class MeshCache:
         return self.directory / f"mesh-{key}.npz"
 
     def load(self, key: str) -> tuple[np.ndarray, np.ndarray] | None:
-        """(p, t) stored under ``key``, or None if absent or unreadable (an unreadable file is then re-made)."""
+        """(p, t) stored under ``key``, or None if absent. A file that cannot be read back whole (truncated, not an
+        npz, wrong arrays, tets pointing past the nodes, non-finite nodes) is deleted, so that it is made again."""
         path = self.path(key)
         if not path.is_file():
             return None
         try:
             with np.load(path, allow_pickle=False) as data:
-                return np.array(data["p"], dtype=float), np.array(data["t"], dtype=np.int64)
-        except (OSError, KeyError, ValueError):
+                nodes, tets = np.array(data["p"], dtype=float), np.array(data["t"], dtype=np.int64)
+            valid = (nodes.ndim == 2 and nodes.shape[0] == 3 and tets.ndim == 2 and tets.shape[0] == 4
+                     and tets.size > 0 and np.isfinite(nodes).all() and tets.min() >= 0
+                     and tets.max() < nodes.shape[1])
+        except Exception:                      # zipfile.BadZipFile, EOFError, OSError, KeyError, ValueError, ...
+            valid = False
+        if not valid:
+            path.unlink(missing_ok=True)       # heal: the next save replaces it
             return None
+        return nodes, tets
 
     def metadata(self, key: str) -> dict:
-        """The metadata stored with ``key`` (empty dict if absent)."""
+        """The metadata stored with ``key`` (empty dict if absent or unreadable)."""
         path = self.path(key)
-        if not path.is_file():
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                return json.loads(str(data["metadata"])) if "metadata" in data else {}
+        except Exception:
             return {}
-        with np.load(path, allow_pickle=False) as data:
-            return json.loads(str(data["metadata"])) if "metadata" in data else {}
 
     def save(self, key: str, nodes: np.ndarray, tets: np.ndarray, metadata: dict | None = None) -> Path:
         """Write (p, t) under ``key`` atomically; returns the file path."""

@@ -11,10 +11,10 @@ the error and every increment converged before it (and steps.csv, and the VTU fi
 from __future__ import annotations
 
 import os
-import socket
 import tempfile
 from pathlib import Path
 
+from fem.atomic import remove_stale_temporaries
 from studies._output import write_csv_atomic, write_json_atomic
 
 NAME = "run"
@@ -75,18 +75,25 @@ def write_outputs(result, out_dir: Path, vtu: bool = False) -> None:
         write_vtu(result, out_dir)
 
 
-def prepare_out_dir(out_dir: Path) -> Path:
-    """Create ``out_dir``, check that a file can be written there, and remove an earlier run's outputs."""
+def check_writable(out_dir: Path) -> Path:
+    """Create ``out_dir`` and check that a file can be written there (before any solve), else PermissionError."""
     out_dir = Path(out_dir)
     if out_dir.exists() and not out_dir.is_dir():
         raise NotADirectoryError(f"--out {str(out_dir)!r} is a file, not a folder")
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
-        handle, probe = tempfile.mkstemp(dir=out_dir, prefix=f".write-test-{socket.gethostname()}-{os.getpid()}.")
+        handle, probe = tempfile.mkstemp(dir=out_dir, prefix=".write-test-", suffix=".tmp")
         os.close(handle)
         os.unlink(probe)
     except OSError as error:
         raise PermissionError(f"--out {str(out_dir)!r} is not writable: {error.strerror or error}") from None
+    remove_stale_temporaries(out_dir)              # left by a killed run
+    return out_dir
+
+
+def prepare_out_dir(out_dir: Path) -> Path:
+    """``check_writable``, then remove an earlier run's outputs, so that none survives this run."""
+    out_dir = check_writable(out_dir)
     for path in [out_dir / name for name in OUTPUTS] + sorted(out_dir.glob("increment_[0-9][0-9][0-9].vtu")) \
             + [out_dir / "increments.pvd"]:
         path.unlink(missing_ok=True)

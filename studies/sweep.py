@@ -14,6 +14,7 @@ import json
 import time
 from pathlib import Path
 
+from fem.atomic import remove_stale_temporaries
 from studies._output import save_figure, write_json_atomic
 
 NAME = "sweep"
@@ -33,11 +34,42 @@ def add_arguments(parser) -> None:
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
+RECORD_KEYS = ("case_id", "status", "increments")
+
+
 def _read_record(path: Path) -> dict | None:
+    """The case record in ``path``, or None when absent, unreadable or not a record of this case (e.g. ``{}``):
+    the case then runs again."""
     try:
-        return json.loads(path.read_text())
+        record = json.loads(path.read_text())
     except (OSError, ValueError):
-        return None                       # absent (or unreadable: the case runs again)
+        return None
+    if not isinstance(record, dict) or any(key not in record for key in RECORD_KEYS) \
+            or record["case_id"] != path.stem or record["status"] not in ("ok", "failed"):
+        return None
+    return record
+
+
+def _identity(spec) -> dict:
+    """What makes two sweeps the same sweep for one --out: the name and the axes (keys)."""
+    return {"name": spec.name, "axes": sorted(spec.axes)}
+
+
+def check_out_dir(out_dir: Path, spec) -> None:
+    """Refuse an --out that holds a different sweep (another name or other axes), or that cannot be written."""
+    previous = out_dir / f"{NAME}.json"
+    if previous.exists():
+        try:
+            stored = json.loads(previous.read_text())
+            stored_identity = {"name": stored["name"], "axes": sorted([*stored["grid"], *stored["list"]])}
+        except (OSError, ValueError, KeyError, TypeError):
+            stored_identity = None
+        if stored_identity != _identity(spec):
+            raise ValueError(f"--out {str(out_dir)!r} holds another sweep ({stored_identity or 'unreadable sweep.json'}"
+                             f"; this one is {_identity(spec)}): choose another --out, or delete that folder")
+    from studies.run import check_writable
+
+    check_writable(out_dir)
 
 
 def _run_pending(tasks, client, cases_dir: Path, on_record) -> None:
@@ -97,8 +129,10 @@ def run(out_dir, quick: bool = False, sweep_file: Path | None = None, scheduler:
 
     start = time.perf_counter()
     out_dir = Path(out_dir)
+    check_out_dir(out_dir, spec)
     cases_dir = out_dir / "cases"
     cases_dir.mkdir(parents=True, exist_ok=True)
+    remove_stale_temporaries(cases_dir)       # left by a killed run (out_dir's: check_writable)
     write_json_atomic(out_dir / f"{NAME}.json", {
         "name": spec.name, "source": spec.source, "grid": dict(spec.grid), "list": dict(spec.zipped),
         "outputs": [o.text for o in spec.outputs], "cases": len(spec.cases), "base_scene": spec.base_document,
