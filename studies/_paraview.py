@@ -31,6 +31,15 @@ def mirrored_mesh(nodes: np.ndarray, tets: np.ndarray) -> tuple[np.ndarray, np.n
     return np.vstack([nodes, mirrored_nodes]), np.vstack([tets, mirrored_tets]), source, sign
 
 
+def _positive(nodes: np.ndarray, tets: np.ndarray) -> np.ndarray:
+    """Tets (m, 4) ordered for a positive volume (VTK's convention; skfem keeps the mesher's orientation)."""
+    corners = nodes[tets]                                                  # (m, 4, 3)
+    negative = np.linalg.det(corners[:, 1:] - corners[:, :1]) < 0.0
+    tets = tets.copy()
+    tets[negative] = tets[negative][:, [0, 2, 1, 3]]
+    return tets
+
+
 def _field_data_legend() -> str:
     """VTK XML FieldData naming each contact-state code (ParaView shows it in the Information panel)."""
     arrays = "".join(f'<DataArray type="Int8" Name="contact_state_{name}" NumberOfTuples="1" format="ascii">{code}'
@@ -60,6 +69,7 @@ def write_vtu(result, out_dir: Path) -> list[Path]:
     source, sign = np.arange(n_vertices), np.ones(n_vertices)
     if half:
         nodes, tets, source, sign = mirrored_mesh(nodes, tets)
+    tets = _positive(nodes, tets)
     legend = _field_data_legend().replace("{half}", str(int(half)))
     flip_y = np.column_stack([np.ones_like(sign), sign, np.ones_like(sign)])          # (n_out, 3)
     paths = []
