@@ -215,12 +215,14 @@ def test_packaged_calibration_is_the_default_design_fitted_on_fem():
 # --- the packaged calibration against a coarse held-out FEM path ----------------------------------------------------
 # Largest |relative error| of the packaged model on the press held out at 1 N and 4 N, as `python -m studies
 # reduced-calibration --quick` measured it on this coarse mesh (fig9's quick mesh, h = 0.7 mm; the CSV's "packaged"
-# columns: depth, the mean of the nine per-bump radius rows, the largest per-bump base spread):
-MEASURED_COARSE = {"depth": 0.020, "contact_radius": 0.034, "base_spread": 0.048}
-# fTetWild meshes of the same settings differ between machines (tests/test_fig_fem_studies.py). A re-meshing at
-# h = 0.7 mm is taken to move these FEM values by no more than refining to h = 0.3 mm moves them, measured between
-# the quick and the default study runs: depth 0.3 %, mean bump radius 3.2 %, per-bump base spread 2.7 %. The
-# closed-form model is 11 % off in depth and 42 % in base spread here: the test tells the two apart.
+# columns: depth, the mean of the nine per-bump radius rows, the largest per-bump base spread). Re-measured on the
+# gmsh mesh (issue 17; the packaged calibration was fitted on fTetWild meshes, which gave 0.020 / 0.034 / 0.048 here):
+MEASURED_COARSE = {"depth": 0.042, "contact_radius": 0.057, "base_spread": 0.079}
+# The mesh is now the same on every machine; the allowance below was set when fTetWild meshes of the same settings
+# differed between runs: a re-meshing at h = 0.7 mm is taken to move these FEM values by no more than refining to
+# h = 0.3 mm moves them, measured between the quick and the default study runs: depth 0.3 %, mean bump radius
+# 3.2 %, per-bump base spread 2.7 %. The closed-form model is 11 % off in depth and 42 % in base spread here: the
+# test tells the two apart.
 MESH_VARIATION = {"depth": 0.003, "contact_radius": 0.032, "base_spread": 0.027}
 
 
