@@ -30,7 +30,7 @@ __all__ = ["PhysicalLimitError", "PhysicalLimitWarning", "check_scene_limits", "
 
 SMALL_STRAIN_WARN = 0.1      # d / H: the linear answer's error grows with the strain, ~10 % here
 SMALL_STRAIN_REFUSE = 0.5    # d / H: half the thickness pressed away; a linear gel says nothing there
-CONTACT_WIDTH_WARN = 0.3     # a / R: the paraboloid of Hertz differs from the sphere by (a/R)^2 / 4 ~ 2 % at the rim
+CONTACT_WIDTH_WARN = 0.4     # a / R: the paraboloid of Hertz departs from the sphere by (a/R)^2 / 4 = 4 % at the rim
 CONTACT_WIDTH_REFUSE = 1.0   # a / R: a contact wider than the sphere's radius has no small-strain meaning
 SLIDING_WARN = 0.1           # slid distance / a: the gap paired at the start is off by about this fraction of d
 SLIDING_REFUSE = 0.5         # slid distance / a: half the contact has moved onto other body points
