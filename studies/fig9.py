@@ -69,7 +69,8 @@ def _store_calibration(path: Path, scene, array, calibration) -> None:
     from studies._output import write_json_atomic
 
     write_json_atomic(path, {"design": {"gel": {"shape": scene.gel.shape, **dict(scene.gel.parameters)},
-                                        "E": scene.material.E, "nu": scene.material.nu, "mu": scene.contact.friction_coefficient,
+                                        "E": scene.material.E, "nu": scene.material.nu,
+                                        "friction_coefficient": scene.contact.friction_coefficient,
                                         "sensor_pitch": array.pitch, "sensor_nodes": list(array.node_counts)},
                              "calibration": calibration.to_dict(),
                              "fitted_on": "FEM plate shifts (the two smallest) of the fig9 translation run"})
