@@ -110,7 +110,7 @@ def test_nodal_average_is_p1_only_and_named_in_errors():
         assemble_stiffness(basis, E, 0.45, "nodal_average")
     with pytest.raises(ValueError, match=r"volumetric='mixed' is not one of \['nodal_average', 'standard'\]"):
         assemble_stiffness(basis, E, 0.45, "mixed")
-    with pytest.raises(ValueError, match=r"mesh.volumetric='mixed' is not one of \['nodal_average', 'standard'\]"):
+    with pytest.raises(ValueError, match=r"mesh.volumetric='mixed' is not one of \['standard', 'nodal_average'\]"):
         MeshSettings(volumetric="mixed")
     with pytest.raises(ValueError, match=r"mesh.volumetric='nodal_average' needs mesh.order=1 .* mesh.order=2"):
         MeshSettings(volumetric="nodal_average", order=2)
