@@ -36,6 +36,10 @@ class Increment:
     residual: float
     seconds: float
     substeps: int = 1                 # > 1 when Newton needed the increment split (automatic bisection)
+    # recovered below the element size from the contact forces (contact.recovery): p = 0 and |q| = mu p contours
+    recovered_contact_radius: float | None = None    # [mm]
+    recovered_stick_ratio: float | None = None       # [-]
+    recovered_peak_pressure: float | None = None     # [MPa]
     # fields (not written to result.json): per candidate point and per base point
     status: np.ndarray = field(repr=False, default=None)
     pressure: np.ndarray = field(repr=False, default=None)
@@ -46,7 +50,8 @@ class Increment:
 
     SCALARS = ("load_kind", "normal_force", "tangential_force", "torque", "depth", "shift", "angle", "contact_area",
                "stick_area", "contact_radius", "stick_radius", "stick_ratio", "max_pressure", "iterations",
-               "residual", "seconds", "substeps")
+               "residual", "seconds", "substeps", "recovered_contact_radius", "recovered_stick_ratio",
+               "recovered_peak_pressure")
 
     def summary(self) -> dict:
         return {name: getattr(self, name) for name in self.SCALARS}
@@ -99,11 +104,15 @@ class ContactUnderResolved(ValueError):
 
 
 def record_increment(kind, state: ContactState, iterations, history, model, factorization, candidates, areas,
-                     lever, scene, seconds, multiplicity=1.0, substeps=1) -> Increment:
-    """Post-process a converged state: areas, radii, stick ratio, pressures, full displacement and base traction.
+                     lever, scene, seconds, multiplicity=1.0, substeps=1, candidate_triangles=None) -> Increment:
+    """Post-process a converged state: areas, radii, stick ratio, pressures, full displacement and base traction,
+    and the boundaries and pressure recovered below the element size (``contact.recovery``).
 
     ``multiplicity`` = 2 for a half model: whole-body forces and areas are twice those of the computed half.
+    ``candidate_triangles``: the top triangles among the candidates (``contact.recovery.surface_triangles``).
     """
+    from contact.recovery import recover_contact, surface_triangles
+
     status = state.status
     contact_area = multiplicity * float(areas[status != OPEN].sum())
     stick_area = multiplicity * float(areas[status == STICK].sum())
@@ -121,6 +130,10 @@ def record_increment(kind, state: ContactState, iterations, history, model, fact
     base_forces = reaction[model.base.dofs]                              # (n_base, 3) support force on the gel
     displacement_full = model.full_vector(u_free)
     check_no_penetration(model, candidates, displacement_full, scene, state.depth)
+    if candidate_triangles is None:
+        candidate_triangles = surface_triangles(model.top.triangles, candidates, model.top.areas.size)
+    recovered = recover_contact(model.top.positions[candidates], candidate_triangles, areas, state.normal_force,
+                                state.tangential_force, status, scene.contact.friction_coefficient, mirror_y=multiplicity == 2.0)
     return Increment(
         load_kind=kind, normal_force=multiplicity * float(state.normal_force.sum()),
         # a mirror half carries half of F_x; its F_y and torque are cancelled by the other half
@@ -135,7 +148,8 @@ def record_increment(kind, state: ContactState, iterations, history, model, fact
         max_pressure=float(pressure.max()), iterations=int(iterations), residual=float(history[-1]),
         seconds=float(seconds), substeps=int(substeps), status=status.copy(), pressure=pressure, traction=traction,
         base_pressure=base_forces[:, 2] / model.base.areas, base_traction=base_forces[:, :2] / model.base.areas[:, None],
-        displacement_full=displacement_full)
+        displacement_full=displacement_full, recovered_contact_radius=recovered.contact_radius,
+        recovered_stick_ratio=recovered.stick_ratio, recovered_peak_pressure=recovered.peak_pressure)
 
 
 def check_no_penetration(model, candidates, displacement_full, scene, depth) -> None:

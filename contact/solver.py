@@ -14,6 +14,7 @@ from contact.result import (ContactResult, ContactUnderResolved, Increment, Load
 from contact.compliance import SurfaceCompliance
 from contact.limits import (PhysicalLimitError, check_increment_limits, check_resources, check_scene_limits,
                             contact_centers, estimated_contact)
+from contact.recovery import surface_triangles
 from contact.scene import Scene
 from fem.elasticity import ElasticModel, assemble_elastic_model
 from fem.linear_solver import SaddlePointFactorization, SpdFactorization
@@ -170,6 +171,7 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
     gap0 = scene.body.initial_gap(positions[:, :2]) - positions[:, 2]       # the gel's top point is at z = 0
     lever = np.column_stack([-(positions[:, 1] - scene.body.center[1]), positions[:, 0] - scene.body.center[0]])
     areas = model.top.areas[candidates]
+    candidate_triangles = surface_triangles(model.top.triangles, candidates, model.top.areas.size)
     augmentation = _augmentation(areas, scene.material.effective_modulus)
     n = candidates.size
     state = ContactState(np.zeros(n), np.zeros((n, 2)), np.zeros((n, 3)))
@@ -207,7 +209,8 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
                 raise PathNotCompleted(f"increment {len(result.increments) + 1} ({kind}): {error}", result) from error
             result.increments.append(record_increment(kind, state, iterations, history, model, prepared.factorization,
                                                       candidates, areas, lever, scene,
-                                                      time.perf_counter() - step_start, multiplicity, substeps))
+                                                      time.perf_counter() - step_start, multiplicity, substeps,
+                                                      candidate_triangles))
             increment = result.increments[-1]
             touching = state.status != OPEN
             tangential = increment.displacement_full[model.top.dofs[candidates[touching], :2]]    # (k, 2)

@@ -86,7 +86,9 @@ def solve_array_case(size_contact: float, order: int = 1, n_shear: int = 1) -> d
                          scene.material.effective_modulus).contact_radius)
     contact_radius = float(np.sqrt(result.increments[0].contact_area / (bumps * np.pi)))
     stick_error = result.increments[-1].stick_ratio - float(stick_ratio_translational(ARRAY_LOAD_RATIO, 2))
+    recovered_error = result.increments[-1].recovered_stick_ratio - float(stick_ratio_translational(ARRAY_LOAD_RATIO, 2))
     return dict(**cost, stick_ratio_error=abs(stick_error), stick_ratio_error_signed=stick_error,
+                recovered_stick_ratio_error_cm=abs(recovered_error),
                 final_stick_ratio_error=stick_error, contact_radius_error=contact_radius / radius - 1.0,
                 shift_error=float("nan"))
 
