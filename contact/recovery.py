@@ -153,6 +153,7 @@ def _recovered_square(xy, triangles, areas, values, inside, mirror_y) -> tuple[n
     source_xy, source_areas = xy[inside], areas[inside]
     mirrored = source_xy[:, 1] > 0
     if mirror_y:                                  # the other half of a mirror-symmetric body: the field is even in y
+        source_areas = np.where(mirrored, source_areas, 2.0 * source_areas)   # on y = 0: half a star each side
         source_xy = np.concatenate([source_xy, source_xy[mirrored] * [1.0, -1.0]])
         source_areas = np.concatenate([source_areas, source_areas[mirrored]])
     reach = PATCH_REACH * math.sqrt(float(np.median(areas[inside])))
