@@ -2,8 +2,8 @@
 
 An elastic half-space z < 0 (shear modulus G, Poisson's ratio nu) is loaded on its surface by tractions that are
 uniform over the square cells of a regular grid (spacing h); displacements are taken at the cell centres. A unit
-surface force F at the origin displaces a surface point at (X, Y), rho = sqrt(X^2 + Y^2), by (Johnson 1985, eqs.
-2.19 and 3.?; Boussinesq 1885, Cerruti 1882), in the toolkit's frame (z up, the body pressing down):
+surface force F at the origin displaces a surface point at (X, Y), rho = sqrt(X^2 + Y^2), by (Boussinesq
+1885, Cerruti 1882; Johnson 1985, sec. 2.2 and 3.2), in the toolkit's frame (z up, the body pressing down):
 
     u_x = [(1 - nu)/rho + nu X^2/rho^3] F_x/(2 pi G) + nu X Y/rho^3 F_y/(2 pi G) + (1 - 2 nu) X/rho^2 F_z/(4 pi G)
     u_y = nu X Y/rho^3 F_x/(2 pi G) + [(1 - nu)/rho + nu Y^2/rho^3] F_y/(2 pi G) + (1 - 2 nu) Y/rho^2 F_z/(4 pi G)

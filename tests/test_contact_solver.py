@@ -113,6 +113,59 @@ def test_stick_ratio_under_twist_follows_lubkin(twist_result):
         assert inc.torque == pytest.approx(torque, rel=1e-8)      # the torque target is met to Newton's tolerance
 
 
+RECOVERED_STICK_TOLERANCE = 0.01
+# Recovered c/a (contact.recovery) against the coupled half-space reference on the same load path: measured on
+# HCM-1 at h = a/5 (0.2 mm) max 0.009 (P1, nu = 0.45), falling to 0.003 at a/10 (studies convergence: order ~1.5);
+# here 0.006. The tolerance is issue 19's target at h = a/5; nodal-area c/a at this size is off by up to 0.045.
+
+
+@pytest.fixture(scope="module")
+def shear_reference(shear_result):
+    from contact.halfspace import solve_halfspace
+
+    return solve_halfspace(shear_result.scene, 0.1)       # cells a/11: c/a within 0.003 of a/21 cells
+
+
+def test_recovered_stick_ratio_follows_the_coupled_reference(shear_result, shear_reference):
+    for inc, reference in zip(shear_result.increments[1:], shear_reference[1:]):
+        assert inc.recovered_stick_ratio == pytest.approx(reference.recovered.stick_ratio,
+                                                          abs=RECOVERED_STICK_TOLERANCE)
+
+
+def test_recovered_contact_radius_and_peak_pressure_follow_hertz(shear_result):
+    # frictionless press: Hertz is exact. Measured at h = a/5: recovered a -0.1 %, p_max +1.2 % (nodal +3.0 %);
+    # HCM-1 at a/10 (P1 stiffness at nu = 0.45 included): a -0.9 %, p_max +2.4 %: 1.5 % and 3 %
+    press = shear_result.increments[0]
+    reference = half_space(0.3)
+    assert press.recovered_contact_radius == pytest.approx(float(reference.contact_radius), rel=0.015)
+    assert press.recovered_peak_pressure == pytest.approx(float(reference.peak_pressure), rel=0.03)
+
+
+def test_recovered_stick_ratio_under_twist_follows_lubkin(twist_result):
+    # the deficit mu p - |q| vanishes like a square root at Lubkin's stick edge too; at h = a/5 the recovered c/a is
+    # within 0.008 at c/a = 0.9 and 0.7 and 0.025 at 0.5 (nodal 0.024): the nodal tolerance +-h/2 holds for both
+    for expected, inc in zip(TWIST_STICK, twist_result.increments[1:]):
+        assert inc.recovered_stick_ratio == pytest.approx(expected, abs=0.5 * H / inc.contact_radius)
+
+
+@pytest.fixture(scope="module")
+def nearly_incompressible_result():
+    # HCM-1's frictional press at nu = 0.49, locking-free P1: beta/mu = 0.04, Cattaneo-Mindlin holds
+    loads = (Load(LoadKind.PRESS, "force", (FORCE,)),
+             Load(LoadKind.SHEAR, "force", tuple(r * MU * FORCE for r in SHEAR_RATIOS)))
+    problem = scene(0.49, loads, frictionless_press=False)
+    problem = Scene(name="nu049", material=problem.material, contact=problem.contact, loads=loads,
+                    mesh=MeshSettings(size_contact=H, volumetric="nodal_average"))
+    return solve_scene(problem)
+
+
+def test_recovered_stick_ratio_follows_cattaneo_mindlin_at_nu_049(nearly_incompressible_result):
+    # measured at h = a/5: recovered within 0.011 of Cattaneo-Mindlin (nodal 0.021); on HCM-1 max 0.015 at a/5,
+    # 0.003 at a/10. The coupled reference moves c/a by < 0.003 at nu = 0.49, included in 0.02.
+    for ratio, inc in zip(SHEAR_RATIOS, nearly_incompressible_result.increments[1:]):
+        assert inc.recovered_stick_ratio == pytest.approx(float(stick_ratio_translational(ratio, 2)), abs=0.02)
+
+
 def test_frictionless_contact_carries_no_tangential_force():
     loads = (Load(LoadKind.PRESS, "force", (FORCE,)), Load(LoadKind.SHEAR, "displacement", (0.05,)))
     result = solve_scene(scene(0.3, loads, h=0.3, mu=0.0))
@@ -150,8 +203,21 @@ def test_non_converged_increment_keeps_earlier_results(failing_after_press):
 def test_hcm1_as_written_follows_cattaneo_mindlin(load_ratio, hcm1_result):
     inc = hcm1_result.increments[1 + [0.2, 0.4, 0.6, 0.8, 0.9].index(load_ratio)]
     expected = float(stick_ratio_translational(load_ratio, 2))
-    # h = 0.1 mm = a/10: +-0.05 (docs/theory.md, sec. 11.1), plus up to 0.012 of Spence pre-slip at nu = 0.45 (sec. 8.3)
-    assert inc.stick_ratio == pytest.approx(expected, abs=0.05 + 0.012)
+    # nodal c/a is quantised to +-h/2 (docs/theory.md, sec. 11.1; h = 0.2 mm = a/5 as written: 0.094), plus the coupling of
+    # the one-increment frictional press at nu = 0.45, up to 0.026 (docs/coupled_reference.md); measured 0.045
+    h = hcm1_result.scene.mesh.size_contact
+    assert inc.stick_ratio == pytest.approx(expected, abs=0.5 * h / inc.contact_radius + 0.026)
+
+
+@pytest.mark.slow
+def test_hcm1_recovered_stick_ratio_follows_the_coupled_reference(hcm1_result):
+    from contact.halfspace import solve_halfspace
+
+    reference = solve_halfspace(hcm1_result.scene, 0.05)          # cells a/21
+    # the scene's own h (0.2 mm = a/5 by default): RECOVERED_STICK_TOLERANCE, measured max 0.009
+    for inc, coupled in zip(hcm1_result.increments[1:], reference[1:]):
+        assert inc.recovered_stick_ratio == pytest.approx(coupled.recovered.stick_ratio,
+                                                          abs=RECOVERED_STICK_TOLERANCE)
 
 
 @pytest.fixture(scope="module")
