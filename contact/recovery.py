@@ -36,7 +36,6 @@ __all__ = ["RecoveredContact", "recover_contact", "moving_least_squares", "lumpe
            "surface_triangles"]
 
 PATCH_POINTS = 40          # sources per moving least-squares patch (a quadratic has 6 coefficients)
-PATCH_REACH = 8.0          # a patch reaches at most this many point spacings: separate contacts do not mix
 CORRECTION_STEPS = 4       # refits with the nodal-averaging correction; the boundary moves < 1e-4 a after 3
 
 
@@ -141,33 +140,47 @@ def lumped_average(xy: np.ndarray, triangles: np.ndarray, squared: np.ndarray) -
     return np.divide(integrals, weights, out=np.zeros(len(xy)), where=weights > 0)
 
 
+def _connected_parts(triangles: np.ndarray, inside: np.ndarray) -> list[np.ndarray]:
+    """The inside points grouped into parts joined by triangle edges between inside points (one per contact)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    edges = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
+    edges = edges[inside[edges].all(axis=1)]
+    graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(len(inside),) * 2)
+    labels = connected_components(graph, directed=False)[1]
+    return [np.flatnonzero(inside & (labels == label)) for label in np.unique(labels[inside])]
+
+
 def _recovered_square(xy, triangles, areas, values, inside, mirror_y) -> tuple[np.ndarray, np.ndarray]:
     """Recovered square of the field ``values`` (positive where ``inside``) at the inside points and one ring
-    around them (-inf elsewhere): with the nodal-averaging correction, and the first fit without it."""
+    around them (-inf elsewhere): with the nodal-averaging correction, and the first fit without it. Each
+    connected part (the patch of one bump of an array) is fitted from its own points only."""
     recovered = np.full(len(xy), -np.inf)
-    if not np.any(inside):
-        return recovered, recovered
-    ring = np.zeros(len(xy), bool)
-    ring[triangles[np.any(inside[triangles], axis=1)].ravel()] = True
-    ring_triangles = triangles[np.all(ring[triangles], axis=1)]
-    source_xy, source_areas = xy[inside], areas[inside]
-    mirrored = source_xy[:, 1] > 0
-    if mirror_y:                                  # the other half of a mirror-symmetric body: the field is even in y
-        source_areas = np.where(mirrored, source_areas, 2.0 * source_areas)   # on y = 0: half a star each side
-        source_xy = np.concatenate([source_xy, source_xy[mirrored] * [1.0, -1.0]])
-        source_areas = np.concatenate([source_areas, source_areas[mirrored]])
-    reach = PATCH_REACH * math.sqrt(float(np.median(areas[inside])))
-    measured = values[inside]
-    data = measured
-    for step in range(CORRECTION_STEPS + 1):
-        square = data * np.abs(data)
-        if mirror_y:
-            square = np.concatenate([square, square[mirrored]])
-        recovered[ring] = moving_least_squares(source_xy, square, xy[ring], source_areas, reach=reach)
-        if step == 0:
-            first_fit = recovered.copy()
-        averaged = lumped_average(xy, ring_triangles, np.where(ring, recovered, 0.0))[inside]
-        data = measured + np.sqrt(np.maximum(recovered[inside], 0.0)) - averaged
+    first_fit = recovered.copy()
+    for part in _connected_parts(triangles, inside):
+        member = np.zeros(len(xy), bool)
+        member[part] = True
+        ring = np.zeros(len(xy), bool)
+        ring[triangles[np.any(member[triangles], axis=1)].ravel()] = True
+        ring_triangles = triangles[np.all(ring[triangles], axis=1)]
+        source_xy, source_areas = xy[part], areas[part]
+        mirrored = source_xy[:, 1] > 0
+        if mirror_y:                              # the other half of a mirror-symmetric body: the field is even in y
+            source_areas = np.where(mirrored, source_areas, 2.0 * source_areas)   # on y = 0: half a star each side
+            source_xy = np.concatenate([source_xy, source_xy[mirrored] * [1.0, -1.0]])
+            source_areas = np.concatenate([source_areas, source_areas[mirrored]])
+        measured = values[part]
+        data = measured
+        for step in range(CORRECTION_STEPS + 1):
+            square = data * np.abs(data)
+            if mirror_y:
+                square = np.concatenate([square, square[mirrored]])
+            recovered[ring] = moving_least_squares(source_xy, square, xy[ring], source_areas)
+            if step == 0:
+                first_fit[ring] = recovered[ring]
+            averaged = lumped_average(xy, ring_triangles, np.where(ring, recovered, 0.0))[part]
+            data = measured + np.sqrt(np.maximum(recovered[part], 0.0)) - averaged
     return recovered, first_fit
 
 
@@ -207,6 +220,8 @@ def recover_contact(xy: np.ndarray, triangles: np.ndarray, areas: np.ndarray, no
     stick = (status == STICK) & in_contact & (deficit > 0)
     square_pressure, fitted_pressure = _recovered_square(xy, triangles, areas, pressure, in_contact, mirror_y)
     square_deficit, _ = _recovered_square(xy, triangles, areas, deficit, stick, mirror_y)
+    # mu p - |q| <= mu p: the stick zone lies inside the contact, also where too few points make the fits loose
+    square_deficit = np.minimum(square_deficit, friction_coefficient**2 * square_pressure)
     multiplicity = 2.0 if mirror_y else 1.0
 
     def area_inside(square):
