@@ -221,8 +221,10 @@ def recover_contact(xy: np.ndarray, triangles: np.ndarray, areas: np.ndarray, no
     square_pressure, fitted_pressure = _recovered_square(xy, triangles, areas, pressure, in_contact, mirror_y)
     square_deficit, _ = _recovered_square(xy, triangles, areas, deficit, stick, mirror_y)
     # mu p - |q| <= mu p: the stick zone lies inside the contact, also where too few points make the fits loose
-    square_deficit = np.minimum(square_deficit, np.where(np.isfinite(square_pressure),
-                                                         friction_coefficient**2 * square_pressure, -np.inf))
+    bound = square_pressure.copy()
+    finite = np.isfinite(bound)
+    bound[finite] *= friction_coefficient**2
+    square_deficit = np.minimum(square_deficit, bound)
     multiplicity = 2.0 if mirror_y else 1.0
 
     def area_inside(square):
