@@ -74,7 +74,7 @@ def test_bonded_flat_punch_follows_mossakovskii(poissons_ratio):
 
 def half_space_scene(nu, shear_ratios=(0.2, 0.5, 0.8), press_steps=1, frictionless_press=False):
     press = tuple(FORCE * k / press_steps for k in range(1, press_steps + 1))
-    return Scene(name="half-space", material=Material(1.0, nu), contact=ContactSpec(mu=MU,
+    return Scene(name="half-space", material=Material(1.0, nu), contact=ContactSpec(friction_coefficient=MU,
                  frictionless_press=frictionless_press),
                  loads=(Load(LoadKind.PRESS, "force", press),
                         Load(LoadKind.SHEAR, "force", tuple(r * MU * FORCE for r in shear_ratios))))
