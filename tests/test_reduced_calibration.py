@@ -252,16 +252,16 @@ def test_packaged_calibration_is_the_default_design_fitted_on_fem():
 
 
 # --- the packaged calibration against a coarse held-out FEM path ----------------------------------------------------
-# One coarse FEM path no fit saw, on the study's quick mesh (``reduced-calibration --quick``: h = 0.7 mm, the fine
-# zone of its 6 N press; meshed once, then from the mesh cache): a press through 1.5, 3 and 5 N, a shear of 2 N
-# along the diagonal, then a torque of 12 N mm on top. The packaged file was fitted on the default mesh
-# (h = 0.3 mm). Tolerance per quantity: the error the file states for its own held-out cases (provenance.held_out,
-# default mesh) plus how far the mesh change moves the FEM value, measured between the quick and default study runs
-# over their common held-out paths (largest |quick / default - 1|; for the CoP shifts the largest per-bump, per-axis
-# difference over the increment's largest shift). A re-meshing with the same settings, as fTetWild gives on another
-# machine, is taken to move the FEM by no more than refining 0.7 -> 0.3 mm does. The sensor's CoP is the most
-# mesh-sensitive FEM quantity (the base pressure on 1.5 mm against 1.0 mm triangles, read in 3 mm cells).
-MESH_VARIATION = {"depth": 0.010, "contact_radius": 0.034, "base_spread": 0.034, "cop_cells": 0.047, "cop_sensor": 0.109}
+# One coarse FEM path no fit saw, on the study's quick mesh (``reduced-calibration --quick``: h = 0.7 mm at the bump
+# tops, 1 mm on the sensor plane, the fine zone of its 6 N press; gmsh, the same on every machine): a press through
+# 1.5, 3 and 5 N, a shear of 2 N along the diagonal, then a torque of 12 N mm on top. The packaged file was fitted on
+# the default mesh (h = 0.3 mm) and states its error on its own held-out cases there (provenance.held_out).
+# Tolerance per quantity: that stated error plus how far the coarser mesh moves the FEM value, measured between the
+# quick and default study runs over their common held-out paths (largest |quick / default - 1|; for the CoP shifts
+# the largest per-bump, per-axis difference over the increment's largest shift): depth 4.0 %, mean bump radius
+# 2.7 %, base spread 1.7 %, CoP shift in the cells 7.1 %, through the sensor 9.1 %. Measured here: 3.3 %, 2.9 %,
+# 7.5 %, 3.3 %, 6.3 %. The closed-form model misses the CoP shifts by ~75 %: the test tells the two apart.
+MESH_VARIATION = {"depth": 0.040, "contact_radius": 0.027, "base_spread": 0.017, "cop_cells": 0.071, "cop_sensor": 0.091}
 
 
 @pytest.fixture(scope="module")
@@ -343,9 +343,9 @@ def test_stored_samples_of_another_plan_are_refused(tmp_path):
 
 @pytest.mark.slow
 def test_quick_study_meets_the_cop_target_and_refits_from_its_samples(tmp_path):
-    # the whole quick study (~1-2 min): held-out per-bump CoP shifts within the 10 % target in the cells and
-    # through the sensor (measured 4.6 % and 8.0 % on the quick mesh), the closed form far off (~80 %); a refit from
-    # the stored FEM samples gives the same parameters bit for bit (the same arrays into the same fit)
+    # the whole quick study (~1 min): held-out per-bump CoP shifts within the 10 % target in the cells and through
+    # the sensor (measured 5.0 % and 9.2 % on the quick mesh), the closed form far off (~75 %); a refit from the
+    # stored FEM samples gives the same parameters bit for bit (the same arrays into the same fit)
     from studies.reduced_calibration import run
 
     first = run(tmp_path / "solve", quick=True)

@@ -31,12 +31,12 @@ written by ``python -m studies reduced-calibration --write-package-data`` (``con
 FEM bench of figs. 6/9 (this default design, mu = 1, rigid plate, h = 0.3 mm): presses at 1-6 N, shears along x
 at 2 N and along y at 6 N, shifts into full sliding at 1 and 2 N, torques at 4 N and a shear then torques at 1 N;
 the file keeps the mesh, load paths, fit residuals and the error on held-out FEM paths. Against the closed forms
-above the FEM gives k_n +13 % (no base settlement term), c_a +1.5 %, G* -43 % (bump bending and base shear),
-G_t -34 %, and for the base pressure a wider kernel (sigma = 3.29 mm = 1.41 R / 2), an arm h_0 = 7.54 mm = 0.98 H
-that falls by kappa = 1.42 mm per N of bump force (6.8 mm at the 6 N press, 5.9 mm at 2 N per bump), and g = 0:
-in the small-strain FEM the contact loads act on the undeformed bump top, so the base pressure follows the loads,
-not the displacement (its CoP stays put while a bump slides on; a free fit gives g = 0.13 +- 0.04, correlated
-0.93 with kappa: a trade between the two, not a displacement term). The closed loop
+above the FEM gives k_n +16 % (no base settlement term), c_a -2 %, G* -41 % (bump bending and base shear),
+G_t -29 %, and for the base pressure a wider kernel (sigma = 3.25 mm = 1.39 R / 2), an arm h_0 = 7.49 mm = 0.98 H
+that falls at first by kappa = 1.36 mm per N of bump force (6.8 mm at the 6 N press, 5.9 mm at 2 N per bump), and
+g = 0: in the small-strain FEM the contact loads act on the undeformed bump top, so the base pressure follows the
+loads, not the displacement (its CoP stays put while a bump slides on; a free fit gives g = 0.26 +- 0.06, correlated
+0.93 with kappa and 0.13 on another mesh: a trade between the two, not a displacement term). The closed loop
 (controller.closed_loop.default_tip) runs on these calibrated parameters; ``from_design`` gives the closed forms.
 """
 
