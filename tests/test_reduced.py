@@ -4,14 +4,15 @@ With an untilted flat object every bump carries P / k, so each per-bump law must
 formula exactly (to the solver tolerance), and the array laws follow from statics alone.
 """
 
+import dataclasses
 import json
 import math
 
 import numpy as np
 import pytest
 
-from contact.reduced import (ArrayFingertipDesign, ReducedFingertip, ReducedParameters, SlipMode, bump_response,
-                             normal_split)
+from contact.reduced import (ArrayFingertipDesign, BaseGrid, ReducedFingertip, ReducedParameters, SlipMode,
+                             bump_response, normal_split)
 from contact.theory import effective_modulus, hertz, lubkin_twist, mindlin_shift, shear_modulus
 from controller.sensor import PressureField
 
@@ -87,16 +88,89 @@ def test_base_pressure_carries_the_normal_force():
     assert state.normal_force.sum() == pytest.approx(P, rel=1e-12)
 
 
-def test_pressure_centre_moves_with_shear_and_load_ratio():
-    grid = TIP.base_grid(0.25)
-    force, radius = np.array([1.0]), np.array([1.5])
+def test_pressure_centre_moves_by_the_couple_over_the_force():
+    # one centred bump: its mirrored bell is symmetric about the origin, so the centre of the whole base pressure is
+    # M / P = (h(P) Q + g P delta) / P, exactly (force and first moment are normalised on the grid)
     one = ReducedFingertip(ArrayFingertipDesign(rows=1, cols=1))
-    shift, tangential = np.array([[0.1, 0.0]]), np.array([[0.3, 0.0]])
-    pressure = one.base_pressure(grid, force, radius, shift, tangential)
-    centre = (pressure.sum(axis=0) @ grid.x) / pressure.sum()
-    expected = one.parameters.cop_gain * 0.1 + one.parameters.moment_arm * 0.3
-    # nodal centroid of the paraboloid (a kink at its rim) sampled at h = 0.25 mm off its centre: O(h^2 / w) ~ 1e-4
-    assert centre == pytest.approx(expected, abs=1e-3)
+    grid = one.base_grid(0.25)
+    force, shift, tangential = np.array([1.0]), np.array([[0.1, -0.05]]), np.array([[0.3, 0.2]])
+    pressure = one.base_pressure(grid, force, np.array([1.5]), shift, tangential)
+    centre = (pressure.ravel() @ grid.points) / pressure.sum()
+    p = one.parameters
+    expected = p.displacement_gain * shift[0] + p.couple_arm_at(1.0) * tangential[0]
+    assert p.couple_arm_at(1.0) == pytest.approx(DESIGN.bump_radius + DESIGN.base_thickness)   # closed form: H
+    assert centre == pytest.approx(expected, abs=1e-12)
+
+
+def test_base_pressure_carries_each_couple_exactly():
+    # 3 x 3 with different loads per bump: total force sum P_i and the first moment of the couples sum M_i, to
+    # round-off of ~2e3 grid nodes; nothing outside the base layer, whose edges are mirrors of the kernel
+    rng = np.random.default_rng(7)
+    force = rng.uniform(0.2, 1.0, 9)
+    tangential = rng.uniform(-0.4, 0.4, (9, 2)) * force[:, None]
+    shift = rng.uniform(-0.2, 0.2, (9, 2))
+    tip = ReducedFingertip(DESIGN, ReducedParameters.from_design(DESIGN))
+    grid = tip.base_grid(0.5)
+    with_couple = tip.base_pressure(grid, force, np.ones(9), shift, tangential)
+    bells = tip.base_pressure(grid, force, np.ones(9), np.zeros((9, 2)), np.zeros((9, 2)))
+    area = grid.spacing**2
+    assert with_couple.sum() * area == pytest.approx(force.sum(), rel=1e-12)
+    assert bells.sum() * area == pytest.approx(force.sum(), rel=1e-12)
+    moment = ((with_couple - bells).ravel() * area) @ grid.points
+    assert moment == pytest.approx(tip.couple(force, shift, tangential).sum(axis=0), rel=1e-12)
+    half_x, half_y = DESIGN.footprint
+    outside = (np.abs(grid.points[:, 0]) > half_x) | (np.abs(grid.points[:, 1]) > half_y)
+    assert np.all(with_couple.ravel()[outside] == 0.0)
+
+
+def test_base_pressure_is_linear_in_the_loads():
+    # superposition, the premise of the model (the gel is linear): two load sets add. The arm h(P_i) is taken
+    # constant and g = 0 here: h(P_i) Q_i and g P_i delta_i are products of loads, not linear in them.
+    parameters = dataclasses.replace(TIP.parameters, couple_arm_slope=0.0, displacement_gain=0.0)
+    tip = ReducedFingertip(DESIGN, parameters)
+    grid = tip.base_grid(1.0)
+    first = (np.full(9, 0.5), np.full((9, 2), 0.1), np.tile([0.2, 0.0], (9, 1)))
+    second = (np.linspace(0.1, 0.9, 9), np.full((9, 2), -0.05), np.tile([0.0, 0.3], (9, 1)))
+    fields = [tip.base_pressure(grid, force, np.ones(9), shift, load) for force, shift, load in (first, second)]
+    both = tip.base_pressure(grid, *[a + b for a, b in zip(first[:1], second[:1])], np.ones(9),
+                             first[1] + second[1], first[2] + second[2])
+    # round-off of a sum over 27 separable terms
+    assert both == pytest.approx(fields[0] + fields[1], abs=1e-14 * np.abs(both).max())
+
+
+def test_couple_arm_law():
+    p = dataclasses.replace(TIP.parameters, couple_arm=7.5, couple_arm_slope=2.0, couple_arm_limit=3.8)
+    assert p.couple_arm_at(0.0) == pytest.approx(7.5)
+    step = 1e-6
+    slope = (p.couple_arm_at(step) - p.couple_arm_at(0.0)) / step
+    assert slope == pytest.approx(-2.0, rel=1e-5)            # forward difference: O(step kappa / excess)
+    assert p.couple_arm_at(1e9) == pytest.approx(3.8, rel=1e-6)
+    assert np.all(np.diff(p.couple_arm_at(np.linspace(0.0, 20.0, 50))) < 0.0)
+
+
+@pytest.mark.parametrize("change, match", [
+    (dict(couple_arm_slope=1.0, couple_arm_limit=8.0), r"couple_arm_limit=8.0 outside allowed range"),
+    (dict(couple_arm_slope=-0.1), r"couple_arm_slope=-0.1 outside allowed range"),
+    (dict(displacement_gain=3.0), r"displacement_gain=3.0 outside allowed range"),
+    (dict(kernel_width=0.0), r"kernel_width=0.0"),
+])
+def test_invalid_pressure_parameters_raise(change, match):
+    with pytest.raises(ValueError, match=match):
+        dataclasses.replace(TIP.parameters, **change)
+
+
+@pytest.mark.parametrize("grid, loads, match", [
+    (BaseGrid(np.linspace(-15.0, 15.0, 31), np.linspace(-25.0, 25.0, 51)), {}, r"grid\.x spans \[-15, 15\] mm"),
+    (None, dict(bump_force=np.ones(8)), r"bump_force has shape \(8,\), expected \(9,\)"),
+    (None, dict(tangential_force=np.ones(9)), r"tangential_force has shape \(9,\), expected \(9, 2\)"),
+    (None, dict(bump_force=np.full(9, np.nan)), r"non-finite loads"),
+])
+def test_base_pressure_refuses_bad_input(grid, loads, match):
+    arguments = dict(bump_force=np.ones(9), contact_radius=np.ones(9), shear_displacement=np.zeros((9, 2)),
+                     tangential_force=np.zeros((9, 2)))
+    arguments.update(loads)
+    with pytest.raises(ValueError, match=match):
+        TIP.base_pressure(grid or TIP.base_grid(1.0), **arguments)
 
 
 def test_tilt_splits_the_normal_force_by_hertz():

@@ -18,6 +18,9 @@ lambda* = min_xi h(xi) / (F.v + T omega) is the factor by which the load may gro
 sum mu P_i |r_i| plus the bumps' own torsion; in between the torque the array can carry falls with the tangential
 load. The minimising twist tells the mode: its instantaneous centre |v| / |omega| inside the array (within the
 farthest bump) is a rotational slip, outside it a translational slip.
+
+The base pressure that the sensor reads is ``_base``'s: per bump a mirrored Gaussian bell and the pressure
+couple of its overturning moment.
 """
 
 from __future__ import annotations
@@ -30,10 +33,12 @@ import numpy as np
 from contact.theory import LUBKIN_SLIP_TORQUE_RATIO
 from fem.validation import check_finite_array, check_positive
 
+from ._base import BaseGrid, BaseKernel, base_grid
 from ._bumps import BumpResponse, bump_response, normal_split
 from ._design import ArrayFingertipDesign, ReducedParameters
+from ._store import load_calibration
 
-__all__ = ["ContactState", "ReducedFingertip", "SlipMode", "BaseGrid"]
+__all__ = ["ContactState", "ReducedFingertip", "SlipMode", "BaseGrid", "load_calibrated"]
 
 _DIRECTIONS = 4000                   # Fibonacci points on the twist sphere for the coarse search of lambda*
 NON_SMOOTH_TOLERANCE = 1e-3         # accepted residual / (mu P) where Newton stalls at a bump's slip onset
@@ -76,24 +81,6 @@ class ContactState:
     slip_mode: str
 
 
-@dataclass(frozen=True, eq=False)
-class BaseGrid:
-    """Regular grid on the sensor plane for the base pressure: x (nx,), y (ny,) [mm]; zero pressure on its border."""
-
-    x: np.ndarray
-    y: np.ndarray
-
-    @property
-    def spacing(self) -> float:
-        return float(self.x[1] - self.x[0])
-
-    @property
-    def points(self) -> np.ndarray:
-        """Grid points (ny nx, 2) [mm], row-major like a (ny, nx) pressure image raveled."""
-        grid_x, grid_y = np.meshgrid(self.x, self.y)
-        return np.column_stack([grid_x.ravel(), grid_y.ravel()])
-
-
 def _fibonacci_sphere(count: int) -> np.ndarray:
     index = np.arange(count) + 0.5
     polar = np.arccos(1.0 - 2.0 * index / count)
@@ -117,6 +104,7 @@ class ReducedFingertip:
         self.centres = design.bump_centres                                             # (k, 2) [mm]
         self.length = float(design.pitch)                                              # twist-sphere scale [mm]
         self._directions = _fibonacci_sphere(_DIRECTIONS)
+        self._kernel_cache = {}                                                        # id(grid) -> BaseKernel
 
     # --- round trip ---------------------------------------------------------------------------------------
     def to_dict(self) -> dict:
@@ -133,8 +121,6 @@ class ReducedFingertip:
 
         With ``design`` given, the file's design must equal it (ValueError naming the fields that differ).
         """
-        from ._store import load_calibration
-
         stored = load_calibration(path, design)
         return cls(stored.design, stored.parameters)
 
@@ -299,48 +285,62 @@ class ReducedFingertip:
 
     # --- base pressure ------------------------------------------------------------------------------------
     def base_grid(self, spacing: float = 0.5) -> BaseGrid:
-        """Square grid [mm] over the fingertip, wide enough that no kernel reaches its border at any shift."""
-        spacing = check_positive("spacing", spacing, "mm")
-        half = self.design.half_extent + self.parameters.kernel_spread + self.max_kernel_shift + 2.0 * spacing
-        count = int(math.ceil(half / spacing))
-        axis = np.arange(-count, count + 1) * spacing
-        return BaseGrid(axis, axis.copy())
+        """Square grid [mm] of the given spacing over the base layer, one node past its edges (zero there)."""
+        return base_grid(self.design, spacing)
 
-    @property
-    def max_kernel_shift(self) -> float:
-        """Largest kernel-centre shift [mm]: half a pitch (beyond it the neighbour's base carries the load)."""
-        return 0.5 * self.design.pitch
+    def couple(self, bump_force, shear_displacement, tangential_force=None) -> np.ndarray:
+        """Pressure couple M_i = h(P_i) Q_i + g P_i delta_i (..., k, 2) [N mm] on the sensor plane (``_design``).
+
+        bump_force P_i (..., k) [N], shear_displacement delta_i (..., k, 2) [mm], tangential_force Q_i (..., k, 2)
+        [N] (None: no load term). The centre of bump i's own pressure moves by M_i / P_i.
+        """
+        p = self.parameters
+        force = np.asarray(bump_force, dtype=float)
+        if tangential_force is None:
+            return p.displacement_gain * force[..., None] * np.asarray(shear_displacement, dtype=float)
+        moment = p.couple_arm_at(force)[..., None] * tangential_force
+        if p.displacement_gain != 0.0:
+            moment = moment + p.displacement_gain * force[..., None] * shear_displacement
+        return moment
 
     def base_pressure(self, grid: BaseGrid, bump_force, contact_radius, shear_displacement,
                       tangential_force=None) -> np.ndarray:
-        """Pressure (ny, nx) [MPa] on the sensor plane: sum over bumps of P_i K((x - c_i) / w_i) / (h^2 sum K).
+        """Pressure (ny, nx) [MPa] on the sensor plane: sum over bumps of P_i G(x - r_i) - M_i . (grad G)(x - r_i).
 
-        K(r) = 1 - r^2 for r < 1 (the Hertz-like paraboloid), w_i = sqrt(a_i^2 + s^2), centre
-        c_i = r_i + g_cop delta_i + h Q_i / P_i, the shift capped at half a pitch (``_design``: contact moves with
-        the bump; overturning moment of the tangential load Q_i (k, 2) [N], none if not given). Normalised on the
-        grid, so the piecewise-linear field (``PressureField.from_grid``) integrates to sum P_i exactly.
+        G is the Gaussian of standard deviation ``kernel_width`` mirrored at the base layer's edges and zero beyond
+        them (``_base``), M_i = ``couple(bump_force, shear_displacement, tangential_force)``. Each bump's bell
+        carries P_i (k,) [N] and its couple has the first moment M_i [N mm] on the grid (trapezoid weights, so the
+        piecewise-linear field of ``PressureField.from_grid`` carries sum P_i exactly); a bump with P_i = Q_i = 0
+        adds nothing. ``contact_radius`` (k,) [mm] is checked for its shape only: the base field does not depend on
+        it. The grid must reach past the footprint (``base_grid``); its kernel factors are cached per grid object,
+        so a call costs one (ny, 3k) x (3k, nx) product.
         """
-        p = self.parameters
+        count = len(self.centres)
         bump_force = np.asarray(bump_force, dtype=float)
-        width = np.sqrt(np.asarray(contact_radius) ** 2 + p.kernel_spread**2)                # (k,)
-        shift = p.cop_gain * np.asarray(shear_displacement, dtype=float)                     # (k, 2)
-        if tangential_force is not None:
-            safe = np.where(bump_force > 0.0, bump_force, 1.0)
-            shift = shift + p.moment_arm * np.asarray(tangential_force) / safe[:, None]
-        length = np.sqrt((shift**2).sum(axis=1, keepdims=True))
-        shift = shift * np.minimum(1.0, self.max_kernel_shift / np.where(length > 0.0, length, 1.0))
-        centre = self.centres + shift                                                        # (k, 2)
-        dx = (grid.x[None, :] - centre[:, :1]) / width[:, None]                              # (k, nx)
-        dy = (grid.y[None, :] - centre[:, 1:]) / width[:, None]                              # (k, ny)
-        kernel = np.maximum(1.0 - dx[:, None, :] ** 2 - dy[:, :, None] ** 2, 0.0)           # (k, ny, nx)
-        total = kernel.sum(axis=(1, 2)) * grid.spacing**2
-        weight = bump_force / np.where(total > 0.0, total, 1.0)
-        return np.einsum("k,kyx->yx", weight, kernel)
+        shear_displacement = np.asarray(shear_displacement, dtype=float)
+        for name, value, shape in (("bump_force", bump_force, (count,)),
+                                   ("contact_radius", np.asarray(contact_radius), (count,)),
+                                   ("shear_displacement", shear_displacement, (count, 2)),
+                                   ("tangential_force", tangential_force, (count, 2))):
+            if value is not None and np.shape(value) != shape:
+                raise ValueError(f"{name} has shape {np.shape(value)}, expected {shape} ({count} bumps)")
+        kernel = self._kernel_cache.get(id(grid))
+        if kernel is None or kernel.grid is not grid:
+            kernel = BaseKernel(self.design, self.parameters.kernel_width, grid)
+            if len(self._kernel_cache) >= 8:
+                self._kernel_cache.pop(next(iter(self._kernel_cache)))
+            self._kernel_cache[id(grid)] = kernel
+        return kernel.pressure(bump_force, self.couple(bump_force, shear_displacement, tangential_force))
 
     def state_pressure(self, grid: BaseGrid, state: ContactState) -> np.ndarray:
         """``base_pressure`` of a ContactState (ny, nx) [MPa]."""
         return self.base_pressure(grid, state.normal_force, state.contact_radius, state.shear_displacement,
                                   state.bump_tangential_force)
+
+
+def load_calibrated(path=None, design: ArrayFingertipDesign | None = None) -> "ReducedFingertip":
+    """ReducedFingertip with FEM-calibrated parameters (default: the packaged file of the paper's 3x3 fingertip)."""
+    return ReducedFingertip.calibrated(path, design)
 
 
 def _stiffness_terms(bump_force, parameters, centres):

@@ -11,6 +11,7 @@ held-out comparison read both sides alike. Everything is vectorised over increme
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -20,13 +21,14 @@ from contact._newton import OPEN, STICK
 
 from ._design import ArrayFingertipDesign
 
-__all__ = ["PathSamples", "nearest_bump", "cell_moments", "check_scene_matches_design"]
+__all__ = ["PathSamples", "nearest_bump", "cell_moments", "model_cells", "check_scene_matches_design"]
 
 
 def nearest_bump(xy, centres) -> np.ndarray:
     """Index (n,) of the nearest bump centre for points xy (n, 2) [mm] (ties to the lower index)."""
     xy, centres = np.asarray(xy, dtype=float), np.asarray(centres, dtype=float)
-    return np.argmin(((xy[:, None, :] - centres[None, :, :]) ** 2).sum(axis=2), axis=1)
+    distance = (xy[:, :1] - centres[:, 0]) ** 2 + (xy[:, 1:] - centres[:, 1]) ** 2           # (n, k)
+    return np.argmin(distance, axis=1)
 
 
 def cell_moments(xy, nodal_force, centres):
@@ -36,15 +38,31 @@ def cell_moments(xy, nodal_force, centres):
     carries tension where a bump tilts), so the moments are those of the signed field.
     """
     xy, nodal_force = np.asarray(xy, dtype=float), np.asarray(nodal_force, dtype=float)
-    count = len(centres)
-    owner = np.eye(count)[nearest_bump(xy, centres)]                                 # (n, k) one-hot
-    force = nodal_force @ owner                                                      # (..., k)
+    count, points = len(centres), len(xy)
+    flat = nodal_force.reshape(-1, points)                                           # (m, n)
+    bins = (np.arange(len(flat))[:, None] * count + nearest_bump(xy, centres)).ravel()  # (m n,) frame and cell
+
+    def per_cell(values):                                                            # (m, n) -> (..., k)
+        summed = np.bincount(bins, weights=values.ravel(), minlength=len(flat) * count)
+        return summed.reshape(nodal_force.shape[:-1] + (count,))
+
+    force = per_cell(flat)
     safe = np.where(force != 0.0, force, 1.0)
-    first = np.stack([(nodal_force * xy[:, 0]) @ owner, (nodal_force * xy[:, 1]) @ owner], axis=-1)
-    centre = first / safe[..., None]                                                 # (..., k, 2)
-    square = (nodal_force * (xy**2).sum(axis=1)) @ owner                             # sum f |x|^2
-    second = square / safe - (centre**2).sum(axis=-1)                                # parallel-axis theorem
+    centre = np.stack([per_cell(flat * xy[:, 0]), per_cell(flat * xy[:, 1])], axis=-1) / safe[..., None]
+    second = per_cell(flat * (xy**2).sum(axis=1)) / safe - (centre**2).sum(axis=-1)   # parallel-axis theorem
     return force, centre, second
+
+
+def model_cells(tip, grid, bump_force, displacement, tangential_force):
+    """Cell force (m, k) [N], CoP (m, k, 2) [mm], second moment (m, k) [mm^2] of the model's base pressure.
+
+    ``tip.base_pressure`` on ``grid`` for m bump states - normal forces (m, k) [N], displacements (m, k, 2) [mm],
+    tangential forces (m, k, 2) [N] - cut into the bumps' Voronoi cells like an FEM sensor plane.
+    """
+    radius = tip.parameters.radius_coefficient * np.cbrt(np.maximum(bump_force, 0.0))
+    nodal = np.stack([tip.base_pressure(grid, force, a, delta, q).ravel() for force, a, delta, q
+                      in zip(bump_force, radius, displacement, tangential_force)]) * grid.spacing**2
+    return cell_moments(grid.points, nodal, tip.centres)
 
 
 def check_scene_matches_design(scene, design: ArrayFingertipDesign) -> None:
@@ -58,6 +76,10 @@ def check_scene_matches_design(scene, design: ArrayFingertipDesign) -> None:
              "youngs_modulus": scene.material.E, "poissons_ratio": scene.material.nu}
     wrong = {name: (value, getattr(design, name)) for name, value in pairs.items()
              if not math.isclose(value, getattr(design, name), rel_tol=1e-9)}
+    for name, value, half in (("base_width", geometry.base_width, design.footprint[0]),
+                              ("base_depth", geometry.base_depth, design.footprint[1])):
+        if not math.isclose(value, 2.0 * half, rel_tol=1e-9):      # the model's base pressure lives on it
+            wrong[name] = (value, 2.0 * half)
     if getattr(geometry, "fillet", 0.0) != 0.0:
         wrong["fillet"] = (geometry.fillet, 0.0)
     if tuple(scene.body.center) != (0.0, 0.0):
@@ -164,7 +186,7 @@ class PathSamples:
         (``load_state``), at the total normal force ``normal_force`` (t,) [N] of an untilted plate. depth is the
         model's plate approach (P / (k k_n))^(2/3); the stick ratio sqrt(sum (c_i a_i)^2 / sum a_i^2) takes per bump
         the smaller of its translational and rotational c/a (the stick zone lies inside both). The base pressure is
-        ``state_pressure`` on a grid of ``grid_spacing`` [mm], cut into the Voronoi cells of the bumps.
+        ``base_pressure`` of the states on a grid of ``grid_spacing`` [mm], cut into the bumps' Voronoi cells.
         """
         if control not in ("displacement", "force"):
             raise ValueError(f"control={control!r} is not one of ['displacement', 'force']")
@@ -177,9 +199,10 @@ class PathSamples:
                 states.append(tip.displacement_state(force, (first, second), third, friction))
             else:
                 states.append(tip.load_state(force, (first, second), third, friction))
-        grid = tip.base_grid(grid_spacing)
-        nodal = np.stack([tip.state_pressure(grid, state).ravel() for state in states]) * grid.spacing**2
-        base_force, base_centre, base_second = cell_moments(grid.points, nodal, tip.centres)
+        base_force, base_centre, base_second = model_cells(
+            tip, tip.base_grid(grid_spacing), np.stack([state.normal_force for state in states]),
+            np.stack([state.shear_displacement for state in states]),
+            np.stack([state.bump_tangential_force for state in states]))
         radius = np.stack([state.contact_radius for state in states])                     # (t, k)
         stick = np.stack([np.minimum(state.stick_ratio_translational, state.stick_ratio_rotational)
                           for state in states])
@@ -198,9 +221,23 @@ class PathSamples:
             bump_torque=np.stack([state.bump_torque for state in states]),
             bump_contact_radius=radius, bump_stick_ratio=stick,
             base_force=base_force, base_centre=base_centre, base_second_moment=base_second,
-            base_total_force=nodal.sum(axis=1),
+            base_total_force=base_force.sum(axis=1),
             provenance={"case": case, "model": tip.parameters.source, "control": control,
                         "grid_spacing": grid_spacing})
+
+    def with_model_base(self, tip, grid_spacing: float = 0.5) -> "PathSamples":
+        """This path with its sensor-plane fields from ``tip.base_pressure`` fed with the path's own bump loads.
+
+        Bump normal and tangential forces and the plate displacement at each bump stay those of this path (e.g. the
+        FEM's); base_force, base_centre, base_second_moment and base_total_force become the model's, on its grid
+        of ``grid_spacing`` [mm] cut into the same cells. That isolates the base-pressure law from the bump laws.
+        """
+        grid = tip.base_grid(grid_spacing)
+        force, centre, second = model_cells(tip, grid, self.bump_normal_force, self.bump_displacement(tip.centres),
+                                            self.bump_tangential_force)
+        return dataclasses.replace(self, base_force=force, base_centre=centre, base_second_moment=second,
+                                   base_total_force=force.sum(axis=1),
+                                   provenance=dict(self.provenance, base_model=tip.parameters.source))
 
     @property
     def pressed(self) -> np.ndarray:

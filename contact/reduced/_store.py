@@ -2,13 +2,18 @@
 
 File layout (every key required, no other key allowed)::
 
-    {"schema": "fingertip-contact/reduced-calibration/1",
+    {"schema": "fingertip-contact/reduced-calibration/2",
      "design": {ArrayFingertipDesign fields}, "parameters": {ReducedParameters fields},
      "provenance": {"tag", "date", "package_version", "mesh", "fem_cases", "fit", "diagnostics", "held_out"}}
 
 ``provenance.mesh`` holds the element sizes and DOF count of the FEM runs, ``fem_cases`` their load paths,
 ``fit`` one record per fitted parameter with its residuals (``calibration.FitResult``), ``diagnostics`` further
 numbers of the fit, ``held_out`` the FEM paths no fit saw and the model's largest relative error on each quantity.
+
+Schema 2 (this one) holds the Gaussian base kernel with its pressure couple (kernel_width, couple_arm,
+couple_arm_slope, couple_arm_limit, displacement_gain); schema 1 held the capped paraboloid kernel (kernel_spread,
+cop_gain, moment_arm), whose base-pressure CoP lagged the FEM by half: such a file is refused with a message to
+recalibrate. This module reads and writes files only; ``_model`` builds the fingertip from them.
 """
 
 from __future__ import annotations
@@ -23,9 +28,11 @@ from fem.atomic import write_text_atomic
 from ._design import ArrayFingertipDesign, ReducedParameters
 
 __all__ = ["SCHEMA", "PACKAGED_CALIBRATION", "StoredCalibration", "save_calibration", "load_calibration",
-           "load_calibrated"]
+           "parse_calibration"]
 
-SCHEMA = "fingertip-contact/reduced-calibration/1"
+SCHEMA = "fingertip-contact/reduced-calibration/2"
+_OLD_SCHEMAS = {"fingertip-contact/reduced-calibration/1": "the capped paraboloid base kernel (kernel_spread, "
+                "cop_gain, moment_arm) of schema 1"}
 PACKAGED_CALIBRATION = Path(__file__).parent / "data" / "fingertip_3x3_calibrated.json"
 _TOP_KEYS = ("schema", "design", "parameters", "provenance")
 _PROVENANCE_KEYS = ("tag", "date", "package_version", "mesh", "fem_cases", "fit", "diagnostics", "held_out")
@@ -42,12 +49,6 @@ class StoredCalibration:
     def to_dict(self) -> dict:
         return {"schema": SCHEMA, "design": self.design.to_dict(), "parameters": self.parameters.to_dict(),
                 "provenance": self.provenance}
-
-    def fingertip(self):
-        """The ReducedFingertip of this design with these parameters."""
-        from ._model import ReducedFingertip
-
-        return ReducedFingertip(self.design, self.parameters)
 
 
 def _check_keys(where: str, data, required) -> None:
@@ -81,6 +82,10 @@ def check_design(stored: ArrayFingertipDesign, expected: ArrayFingertipDesign, w
 
 def parse_calibration(data: dict, where: str = "calibration") -> StoredCalibration:
     """StoredCalibration from a parsed JSON object; ValueError naming unknown, missing or bad keys."""
+    if isinstance(data, dict) and data.get("schema") in _OLD_SCHEMAS:
+        raise ValueError(f"{where}: schema={data['schema']!r} holds {_OLD_SCHEMAS[data['schema']]}, which this "
+                         f"version no longer reads (expected {SCHEMA!r}); recalibrate with python -m studies "
+                         f"reduced-calibration, or use the packaged file")
     _check_keys(where, data, _TOP_KEYS)
     if data["schema"] != SCHEMA:
         raise ValueError(f"{where}: schema={data['schema']!r}, expected {SCHEMA!r}")
@@ -134,7 +139,3 @@ def load_calibration(path=None, design: ArrayFingertipDesign | None = None) -> S
         check_design(stored.design, design, str(path))
     return stored
 
-
-def load_calibrated(path=None, design: ArrayFingertipDesign | None = None):
-    """ReducedFingertip with FEM-calibrated parameters (default: the packaged file of the paper's 3x3 fingertip)."""
-    return load_calibration(path, design).fingertip()

@@ -1,9 +1,9 @@
 """Calibration of the reduced fingertip model (``ReducedParameters``) from FEM load paths of the same design.
 
-Inputs are ``PathSamples`` of FEM paths: a press path at several normal forces, shear paths (plate shift along x)
-at the calibration normal force and at a second one, and a twist path (plate angle) at the calibration force.
-Each parameter is fitted with scipy (``least_squares``, ``lsq_linear``) on the quantity it governs, in the order
-that lets the later fits use the earlier values:
+Inputs are ``PathSamples`` of FEM paths: a press path at several normal forces, plate-shift paths along x and y at
+several normal forces (some into full sliding), and plate-twist paths (one after a shift). Each parameter is fitted
+with scipy ``least_squares`` on the quantity it governs, in the order that lets the later fits use the earlier
+values:
 
 normal_stiffness k_n
     total plate approach against P_i = P / k of a centred plate, d = (P_i / k_n)^(2/3). The approach includes the
@@ -21,18 +21,15 @@ torsional_modulus G_t
     per-bump torque about the bump's own axis against the plate twist, through the model (Lubkin laws, each bump
     sheared by theta z x r_i as well). The array torque about its centre is not used: it is ~99 % the moment
     r_i x Q_i of the bumps' shear forces (G*), so it hardly depends on G_t; the report gives its residual.
-kernel_spread s
-    second moment of the base pressure in each bump's cell of the sensor plane. The kernel p ~ 1 - r^2 / w^2 has
-    <r^2> = w^2 / 3 with w^2 = a^2 + s^2; that gives the starting value, and the fit then matches the model's own
-    cell moments (``base_pressure`` cut into the same cells), because the FEM's base pressure is wide (w ~ 8 mm
-    on this design, more than half a pitch): neighbouring kernels overlap and the cells truncate them.
-cop_gain g, moment_arm h
-    per-bump CoP shift of the base pressure against the pressed state, Delta c = g delta_i + h Q_i / P_i (FEM
-    delta_i, Q_i, P_i; shear and twist paths), by bounded linear least squares (g >= 1e-6, h >= 0): the model's
-    law for its kernel centre. At one normal force Q_i / P_i grows monotonically with delta_i and the two terms are
-    nearly collinear; the shear path at a second force separates them. The diagnostics hold the unbounded fit, the
-    standard errors, and how the model's own sensor cells follow the FEM with these numbers (a kernel wider than
-    half a pitch spills into the neighbours' cells, so its cell CoP lags its centre and saturates).
+kernel_width sigma, couple_arm h_0, couple_arm_slope kappa (displacement_gain g)
+    the base pressure (``_base``): per-bump CoP shift of the sensor-plane pressure in the bumps' Voronoi cells
+    against the pressed state, model (fed with the FEM's own bump loads and displacements) against FEM, over every
+    shear and twist increment (``fit_base_pressure``). The paths tell them apart: normal forces from 1 to 6 N (the
+    arm falls with P_i: h_0 against kappa), sliding increments (the displacement grows at a constant load: g), both
+    axes and twist (sigma, the edge mirrors). g is held at 0 for a small-strain FEM (its contact loads act on the
+    undeformed bump tops, and the FEM's CoP stays put while a bump slides); the free fit is kept as a diagnostic.
+couple_arm_limit h_inf
+    not fitted: H / 2 (the paths' bump forces stay far from it).
 damping_time
     a quasi-static FEM path cannot see the gel's viscosity: the closed-form default is kept.
 """
@@ -46,17 +43,15 @@ from typing import Sequence
 
 import numpy as np
 
-from fem.validation import check_positive
-
+from ._base import BaseGrid
 from ._bumps import bump_response, normal_split
 from ._design import ArrayFingertipDesign, ReducedParameters
-from ._model import BaseGrid, ReducedFingertip
-from ._samples import PathSamples, cell_moments
+from ._model import ReducedFingertip
+from ._samples import PathSamples, model_cells
 
 __all__ = ["FitResult", "Calibration", "calibrate", "fit_normal_stiffness", "fit_radius_coefficient",
-           "fit_tangential_modulus", "fit_torsional_modulus", "fit_kernel_spread", "fit_cop", "kernel_grid"]
+           "fit_tangential_modulus", "fit_torsional_modulus", "fit_base_pressure", "kernel_grid", "COP_FIELDS"]
 
-MIN_COP_GAIN = 1e-6            # ReducedParameters needs cop_gain > 0; the bound stands for "no such term"
 KERNEL_GRID_SPACING = 0.5      # mm, the model's default base grid (the closed loop's sensor images)
 
 
@@ -206,133 +201,186 @@ def fit_tangential_modulus(shear: Sequence[PathSamples], design: ArrayFingertipD
                    "effective: bump bending and base shear included")
 
 
-def fit_torsional_modulus(twist: PathSamples, design: ArrayFingertipDesign, parameters: ReducedParameters):
-    """G_t [MPa] from per-bump own-axis torques against the plate twist through the model (N mm / (mu P_i a_i))."""
+def fit_torsional_modulus(twist: Sequence[PathSamples], design: ArrayFingertipDesign,
+                          parameters: ReducedParameters):
+    """G_t [MPa] from per-bump own-axis torques against the plate twist through the model (N mm / (mu P_i a_i)).
+
+    Every twist increment of the paths (a twist after a shift too: the model shears each bump by t + theta z x r_i).
+    """
     from scipy.optimize import least_squares
 
-    mask = _tangential(twist, "twist")
-    scale = twist.friction * twist.bump_normal_force[mask] * np.maximum(twist.bump_contact_radius[mask], 1e-12)
-
-    def model(modulus):
-        trial = dataclasses.replace(parameters, torsional_modulus=modulus)
-        return _model_loads(twist, mask, design, trial)
+    picks = [(path, _tangential(path, "twist")) for path in twist]
+    scales = [path.friction * path.bump_normal_force[mask] * np.maximum(path.bump_contact_radius[mask], 1e-12)
+              for path, mask in picks]
 
     def residual(log_modulus):
-        return ((model(math.exp(log_modulus[0]))[1].torque - twist.bump_torque[mask]) / scale).ravel()
+        trial = dataclasses.replace(parameters, torsional_modulus=math.exp(log_modulus[0]))
+        return np.concatenate([((_model_loads(path, mask, design, trial)[1].torque - path.bump_torque[mask])
+                                / scale).ravel() for (path, mask), scale in zip(picks, scales)])
 
     fitted = least_squares(residual, [math.log(parameters.torsional_modulus)], xtol=1e-12, ftol=1e-12,
                            diff_step=1e-6)
     modulus = math.exp(fitted.x[0])
-    array_torque = model(modulus)[3]
-    relative = (array_torque - twist.torque[mask]) / np.abs(twist.torque[mask])
-    diagnostics = {"array_torque_relative_error": relative.tolist(),
-                   "bump_torque_share": float(np.abs(twist.bump_torque[mask]).sum(axis=1).max()
-                                              / np.abs(twist.torque[mask]).max())}
+    trial = dataclasses.replace(parameters, torsional_modulus=modulus)
+    relative = np.concatenate([(_model_loads(path, mask, design, trial)[3] - path.torque[mask])
+                               / np.abs(path.torque[mask]) for path, mask in picks])
+    share = max(float(np.abs(path.bump_torque[mask]).sum(axis=1).max() / np.abs(path.torque[mask]).max())
+                for path, mask in picks)
+    diagnostics = {"array_torque_relative_error": relative.tolist(), "bump_torque_share": share}
     note = (f"array torque about the centre with this G_t: {100 * np.abs(relative).max():.1f} % max error; the "
-            f"bumps' own torques are {100 * diagnostics['bump_torque_share']:.1f} % of it")
+            f"bumps' own torques are {100 * share:.1f} % of it")
     return _result("torsional_modulus", modulus, ReducedParameters.from_design(design).torsional_modulus,
                    fitted.fun, "N mm / (mu P_i a_i)", note), diagnostics
 
 
 def kernel_grid(design: ArrayFingertipDesign, spacing: float = KERNEL_GRID_SPACING) -> BaseGrid:
-    """Fixed base grid [mm] for the kernel fits: wide enough for s up to two pitches and the largest CoP shift."""
-    check_positive("spacing", spacing, "mm")
-    half = design.half_extent + 2.5 * design.pitch
-    axis = np.arange(-math.ceil(half / spacing), math.ceil(half / spacing) + 1) * spacing
-    return BaseGrid(axis, axis.copy())
+    """The model's base grid [mm] of ``design`` for the kernel fits (``ReducedFingertip.base_grid``)."""
+    return ReducedFingertip(design).base_grid(spacing)
 
 
-def _model_cells(tip, grid, bump_force, displacement, tangential_force):
-    """Cell force (m, k), CoP (m, k, 2), second moment (m, k) of the model's base pressure for m bump states."""
-    radius = tip.parameters.radius_coefficient * np.cbrt(np.maximum(bump_force, 0.0))
-    nodal = np.stack([tip.base_pressure(grid, force, a, delta, q).ravel() for force, a, delta, q
-                      in zip(bump_force, radius, displacement, tangential_force)]) * grid.spacing**2
-    return cell_moments(grid.points, nodal, tip.centres)
+@dataclass(frozen=True, eq=False)
+class _CopData:
+    """FEM increments of the CoP fit: bump loads and displacements (m, k[, 2]) of the shear and twist increments and
+    of the pressed states they start from, the FEM's CoP shifts, and each increment's largest shift (m,) [mm]."""
+
+    bump_force: np.ndarray
+    tangential_force: np.ndarray
+    displacement: np.ndarray
+    pressed_force: np.ndarray
+    pressed_tangential_force: np.ndarray     # a press leaves Q_i ~ 1 % of P_i (friction against the bulge)
+    cop_shift: np.ndarray
+    scale: np.ndarray
+    normal_force: np.ndarray                  # (m,) the path's total normal force [N]
+
+    @classmethod
+    def of(cls, paths: Sequence[PathSamples], design: ArrayFingertipDesign) -> "_CopData":
+        paths = [path for path in paths if (~path.pressed).any()]
+        if not paths:
+            raise ValueError("CoP fit: need shear or twist increments")
+        pick = [(path, ~path.pressed) for path in paths]
+
+        def stack(values):
+            return np.concatenate([values(p)[m] for p, m in pick])
+
+        shift = stack(lambda p: p.cop_shift)                                                # (m, k, 2)
+        scale = np.linalg.norm(shift, axis=2).max(axis=1)
+        if np.any(scale <= 0.0):
+            raise ValueError("CoP fit: a shear or twist increment whose base CoP did not move")
+        return cls(stack(lambda p: p.bump_normal_force), stack(lambda p: p.bump_tangential_force),
+                   stack(lambda p: p.bump_displacement(design.bump_centres)),
+                   stack(lambda p: p.bump_normal_force[p.reference]),
+                   stack(lambda p: p.bump_tangential_force[p.reference]), shift, scale,
+                   stack(lambda p: p.normal_force))
+
+    def residual(self, tip, grid) -> np.ndarray:
+        """(model cell CoP shift - FEM) / the increment's largest FEM shift (m, k, 2) [-], FEM bump loads in."""
+        moved = model_cells(tip, grid, self.bump_force, self.displacement, self.tangential_force)[1]
+        still = model_cells(tip, grid, self.pressed_force, np.zeros_like(self.displacement),
+                            self.pressed_tangential_force)[1]
+        return (moved - still - self.cop_shift) / self.scale[:, None, None]
 
 
-def fit_kernel_spread(press: Sequence[PathSamples], design: ArrayFingertipDesign, parameters: ReducedParameters):
-    """s [mm] from the cell second moments of the FEM base pressure under a press (relative residual)."""
+COP_FIELDS = ("kernel_width", "couple_arm", "couple_arm_slope", "displacement_gain")
+SMALL_STRAIN_GAIN = 0.0         # g of a small-strain FEM: its contact loads act on the undeformed bump tops
+
+
+def _fit_cop(data: _CopData, design, parameters, grid, fields):
+    """least_squares of the CoP residual over ``fields`` (a prefix of COP_FIELDS); fit, standard errors, correlation."""
     from scipy.optimize import least_squares
 
-    _, _, bump_force, _, second = _pressed(press)
-    radius = parameters.radius_coefficient * np.cbrt(bump_force)
-    start = float(np.sqrt(max(np.mean(3.0 * second - radius**2), 1e-6)))     # <r^2> = w^2 / 3, w^2 = a^2 + s^2
+    def model(values):
+        return ReducedFingertip(design, dataclasses.replace(parameters, **dict(zip(fields, values))))
+
+    bounds = {"kernel_width": (0.05 * design.pitch, design.pitch),
+              "couple_arm": (parameters.couple_arm_limit * 1.001, 3.0 * design.bump_height),
+              "couple_arm_slope": (0.0, 100.0), "displacement_gain": (-2.0, 2.0)}
+    low, high = np.array([bounds[f] for f in fields]).T
+    start = np.clip([getattr(parameters, f) for f in fields], low, high)
+    scale = [0.1 if f == "displacement_gain" else 1.0 for f in fields]
+    # dogbox: the trust-region-reflective default creeps along a bound (kappa = 0) and stops on its gtol
+    fitted = least_squares(lambda values: data.residual(model(values), grid).ravel(), start, bounds=(low, high),
+                           method="dogbox", x_scale=scale, diff_step=1e-4, xtol=1e-10, ftol=1e-10, gtol=1e-10)
+    variance = float(fitted.fun @ fitted.fun) / max(fitted.fun.size - len(fields), 1)
+    covariance = variance * np.linalg.pinv(fitted.jac.T @ fitted.jac)
+    error = np.sqrt(np.diag(covariance))
+    outer = np.outer(error, error)
+    correlation = np.divide(covariance, outer, out=np.zeros_like(covariance), where=outer > 0.0)  # exact data: 0
+    return fitted, error, correlation, model(fitted.x)
+
+
+def fit_base_pressure(paths: Sequence[PathSamples], press: Sequence[PathSamples], design: ArrayFingertipDesign,
+                      parameters: ReducedParameters, displacement_gain: float | None = SMALL_STRAIN_GAIN):
+    """sigma [mm], h_0 [mm], kappa [mm/N] (and g [-]) from the per-bump base CoP shifts of shear and twist paths.
+
+    The model's base pressure with the FEM's own bump loads (P_i, Q_i, delta_i per increment, and Q_i of the pressed
+    state each starts from) is cut into the same Voronoi cells as the FEM's sensor plane, and its cell CoP shifts
+    from the pressed state are fitted to the FEM's (``least_squares``, residual over the increment's largest FEM
+    shift, the held-out error measure). h_inf stays at its closed-form H / 2 (the arm of a column whose top cannot
+    turn: the FEM's forces do not reach it). Told apart by: several normal forces (h_0 against kappa: the arm falls
+    with P_i), sliding increments (the displacement grows at a constant load: g), both axes and twist (sigma and the
+    edge mirrors).
+
+    ``displacement_gain``: g is held at this value (default 0: in a small-strain FEM the contact loads act on the
+    undeformed bump tops, so its base pressure cannot depend on the displacement; the sliding paths confirm it)
+    or fitted with the others (None). Either way the diagnostics hold the free four-parameter fit with its standard
+    errors and correlations, the correlation of the old regressors (delta_i against Q_i / P_i) over these paths,
+    and the kernel width the press cells' second moments alone would give.
+    """
+    from scipy.optimize import least_squares
+
+    data = _CopData.of(paths, design)
+    forces = np.unique(np.round(data.normal_force, 6))
+    if forces.size < 2:
+        raise ValueError(f"CoP fit: the shear and twist paths all press with {forces[0]:g} N; need paths at two or "
+                         f"more normal forces to tell the couple arm from its fall with the bump force")
     grid = kernel_grid(design)
+    free, free_error, correlation, free_tip = _fit_cop(data, design, parameters, grid, COP_FIELDS)
+    if displacement_gain is None:
+        fitted, error, tip = free, free_error, free_tip
+    else:
+        held = dataclasses.replace(parameters, displacement_gain=displacement_gain)
+        fitted, error, _, tip = _fit_cop(data, design, held, grid, COP_FIELDS[:3])
+    ratio = data.tangential_force / np.where(data.bump_force > 0.0, data.bump_force, np.inf)[..., None]
+    regressors = np.corrcoef(data.displacement.ravel(), ratio.ravel())[0, 1]
+    _, _, bump_force, _, second = _pressed(press)
     zeros = np.zeros(bump_force.shape + (2,))
 
-    def residual(spread):
-        tip = ReducedFingertip(design, dataclasses.replace(parameters, kernel_spread=spread[0]))
-        return (_model_cells(tip, grid, bump_force, zeros, zeros)[2] / second - 1.0).ravel()
+    def spread(width):                        # the press cells' second moments, relative to the FEM's
+        trial = ReducedFingertip(design, dataclasses.replace(tip.parameters, kernel_width=width[0]))
+        return (np.sqrt(model_cells(trial, grid, bump_force, zeros, zeros)[2] / second) - 1.0).ravel()
 
-    fitted = least_squares(residual, [start], bounds=([1e-3], [2.0 * design.pitch]), method="dogbox", xtol=1e-12,
-                           ftol=1e-12, gtol=1e-12)
-    note = (f"analytic <r^2> = (a^2 + s^2) / 3 gives s = {start:.4g} mm; fitted on the model's own cells "
-            f"(overlapping kernels, truncated by the cells)")
-    return (_result("kernel_spread", fitted.x[0], ReducedParameters.from_design(design).kernel_spread, fitted.fun,
-                    "relative second moment", note), {"kernel_spread_analytic": start})
-
-
-def fit_cop(paths: Sequence[PathSamples], design: ArrayFingertipDesign, parameters: ReducedParameters):
-    """cop_gain g [-], moment_arm h [mm]: bounded linear least squares of Delta c_i = g delta_i + h Q_i / P_i [mm].
-
-    The kernel centre is taken for the cell's CoP (the model's law); the diagnostics say how well the model's own
-    cells (``base_pressure`` cut like the FEM's) then follow the FEM, and which (g, h) would fit them best. At a
-    single normal force Q_i / P_i is a monotone function of delta_i and the two terms cannot be told apart: the
-    correlation of the regressors and the standard errors of g and h are reported; paths at two normal forces
-    separate them (at a fixed delta, Q_i / P_i ~ P_i^(-2/3) while the displacement term does not change).
-    """
-    from scipy.optimize import least_squares, lsq_linear
-
-    centres = design.bump_centres
-    paths = [path for path in paths if (~path.pressed).any()]
-    if not paths:
-        raise ValueError("CoP fit: need shear or twist increments")
-    pick = [(path, ~path.pressed) for path in paths]
-    shift = np.concatenate([p.cop_shift[m] for p, m in pick])                               # (m, k, 2)
-    displacement = np.concatenate([p.bump_displacement(centres)[m] for p, m in pick])       # (m, k, 2)
-    force = np.concatenate([p.bump_normal_force[m] for p, m in pick])                       # (m, k)
-    tangential = np.concatenate([p.bump_tangential_force[m] for p, m in pick])              # (m, k, 2)
-    reference = np.concatenate([p.bump_normal_force[p.reference[m]] for p, m in pick])      # pressed state
-    ratio = tangential / np.where(force > 0.0, force, np.inf)[..., None]                    # Q_i / P_i
-    matrix = np.column_stack([displacement.ravel(), ratio.ravel()])                         # (2 m k, 2)
-    target = shift.ravel()
-    free = np.linalg.lstsq(matrix, target, rcond=None)[0]
-    linear = lsq_linear(matrix, target, bounds=([MIN_COP_GAIN, 0.0], [np.inf, np.inf]), method="bvls")
-    gain, arm = linear.x
-    variance = float(linear.fun @ linear.fun) / max(target.size - 2, 1)
-    standard_error = np.sqrt(np.diag(variance * np.linalg.inv(matrix.T @ matrix)))
-    correlation = float(np.corrcoef(matrix.T)[0, 1])
-    grid = kernel_grid(design)
-    zeros = np.zeros_like(displacement)
-
-    def through_model(gain_arm):
-        tip = ReducedFingertip(design, dataclasses.replace(parameters, cop_gain=gain_arm[0], moment_arm=gain_arm[1]))
-        moved = _model_cells(tip, grid, force, displacement, tangential)[1]
-        still = _model_cells(tip, grid, reference, zeros, zeros)[1]
-        return (moved - still - shift).ravel()
-
-    # dogbox: the trust-region-reflective default creeps along a bound and stops on its gtol
-    best = least_squares(through_model, np.maximum(linear.x, [MIN_COP_GAIN, 0.0]), bounds=([MIN_COP_GAIN, 0.0],
-                         [np.inf, np.inf]), method="dogbox", xtol=1e-12, ftol=1e-12, gtol=1e-12)
-    rms = {"fem": float(np.sqrt(np.mean(target**2))), "linear": float(np.sqrt(np.mean(linear.fun**2))),
-           "from_gain": float(np.sqrt(np.mean((gain * displacement) ** 2))),
-           "from_moment_arm": float(np.sqrt(np.mean((arm * ratio) ** 2))),
-           "model_cells": float(np.sqrt(np.mean(through_model(linear.x) ** 2))),
-           "model_cells_best": float(np.sqrt(np.mean(best.fun**2)))}
-    diagnostics = {"cop_unbounded": {"cop_gain": float(free[0]), "moment_arm": float(free[1])},
-                   "cop_standard_error": {"cop_gain": float(standard_error[0]),
-                                          "moment_arm": float(standard_error[1])},
-                   "cop_regressor_correlation": correlation, "cop_rms": rms,
-                   "cop_model_cells_best": {"cop_gain": float(best.x[0]), "moment_arm": float(best.x[1])}}
+    width_from_press = least_squares(spread, [tip.parameters.kernel_width], bounds=([0.05 * design.pitch],
+                                     [design.pitch]), diff_step=1e-4).x[0]
+    diagnostics = {"base_pressure_free_fit": dict(zip(COP_FIELDS, free.x.tolist())),
+                   "base_pressure_free_fit_standard_error": dict(zip(COP_FIELDS, free_error.tolist())),
+                   "base_pressure_free_fit_correlation": {
+                       f"{a}/{b}": float(correlation[i, j]) for i, a in enumerate(COP_FIELDS)
+                       for j, b in enumerate(COP_FIELDS) if i < j},
+                   "base_pressure_free_fit_rms": float(np.sqrt(np.mean(free.fun**2))),
+                   "cop_old_regressor_correlation": float(regressors),
+                   "cop_fit_increments": int(data.scale.size), "cop_fit_normal_forces": forces.tolist(),
+                   "kernel_width_from_press_spread": float(width_from_press)}
     closed = ReducedParameters.from_design(design)
-    note = (f"FEM CoP shift rms {rms['fem']:.3g} mm, fit rms {rms['linear']:.3g} mm; g delta carries "
-            f"{rms['from_gain']:.3g} mm, h Q/P {rms['from_moment_arm']:.3g} mm; delta and Q/P correlate at "
-            f"{correlation:.3f} (standard errors g {standard_error[0]:.2g}, h {standard_error[1]:.2g} mm); "
-            f"through the model's own sensor cells rms {rms['model_cells']:.3g} mm (best there: g = {best.x[0]:.3g}, "
-            f"h = {best.x[1]:.3g} mm, rms {rms['model_cells_best']:.3g} mm)")
-    return (_result("cop_gain", gain, closed.cop_gain, linear.fun, "mm (CoP shift)", note),
-            _result("moment_arm", arm, closed.moment_arm, linear.fun, "mm (CoP shift)", "fitted with cop_gain"),
-            diagnostics)
+    unit = "CoP shift / the increment's largest FEM shift"
+    notes = {"kernel_width": f"Gaussian sigma, bell and couple alike; the press cells' second moments alone give "
+                             f"{width_from_press:.3g} mm",
+             "couple_arm": f"H = R + t = {design.bump_height:.4g} mm; arm at P_i = 1 N: "
+                           f"{tip.parameters.couple_arm_at(1.0):.3g} mm",
+             "couple_arm_slope": f"arm falls towards h_inf = {parameters.couple_arm_limit:.4g} mm as P_i grows"}
+    results = [_result(name, fitted.x[i], getattr(closed, name), fitted.fun, unit,
+                       f"{notes[name]}; standard error {error[i]:.2g}") for i, name in enumerate(COP_FIELDS[:3])]
+    rms = float(np.sqrt(np.mean(fitted.fun**2)))
+    free_note = (f"free fit g = {free.x[3]:.3g} +- {free_error[3]:.2g}, correlated {correlation[2, 3]:.2f} with "
+                 f"kappa (rms {diagnostics['base_pressure_free_fit_rms']:.4g} against {rms:.4g}); old regressors "
+                 f"delta_i and Q_i / P_i correlate at {regressors:.3f} over these paths")
+    if displacement_gain is None:
+        results.append(_result("displacement_gain", fitted.x[3], closed.displacement_gain, fitted.fun, unit,
+                               f"fitted; standard error {error[3]:.2g}; {free_note}"))
+    else:
+        results.append(_result("displacement_gain", displacement_gain, closed.displacement_gain, fitted.fun, unit,
+                               f"held at {displacement_gain:g} (small-strain FEM: contact loads on the undeformed "
+                               f"bump tops); {free_note}"))
+    return results, diagnostics
 
 
 def _check_tag(tag: str) -> str:
@@ -342,18 +390,20 @@ def _check_tag(tag: str) -> str:
 
 
 def calibrate(design: ArrayFingertipDesign, press: Sequence[PathSamples], shear: Sequence[PathSamples],
-              twist: PathSamples, tag: str) -> Calibration:
-    """Fit every ReducedParameters field but damping_time to FEM samples of ``design`` (module docstring).
+              twist: Sequence[PathSamples], tag: str,
+              displacement_gain: float | None = SMALL_STRAIN_GAIN) -> Calibration:
+    """Fit the ReducedParameters fields but damping_time and couple_arm_limit to FEM samples of ``design``.
 
-    press: paths whose press increments span several normal forces [N]; shear: plate-shift paths (displacement
-    control), at two normal forces to tell cop_gain from moment_arm; twist: a plate-twist path (displacement
-    control). The parameters carry ``source="fem:<tag>"``.
+    press: paths whose press increments span several normal forces [N]; shear: shear paths (force or displacement
+    control) along x and y at several normal forces, some into full sliding; twist: twist paths (possibly after a
+    shear). Module docstring for what each fit reads. ``displacement_gain``: held at this value (default 0, the
+    small-strain FEM's) or fitted (None; ``fit_base_pressure``). The parameters carry ``source="fem:<tag>"``.
     """
     tag = _check_tag(tag)
-    press, shear = list(press), list(shear)
-    if not shear:
-        raise ValueError("calibrate: need at least one shear path")
-    frictions = {s.friction for s in (*press, *shear, twist)}
+    press, shear, twist = list(press), list(shear), list(twist)
+    if not shear or not twist:
+        raise ValueError(f"calibrate: need at least one shear and one twist path, got {len(shear)} and {len(twist)}")
+    frictions = {s.friction for s in (*press, *shear, *twist)}
     if len(frictions) != 1:
         raise ValueError(f"the FEM paths use different friction coefficients {sorted(frictions)}; need one mu")
     closed = ReducedParameters.from_design(design)
@@ -366,13 +416,13 @@ def calibrate(design: ArrayFingertipDesign, press: Sequence[PathSamples], shear:
     torsional, more = fit_torsional_modulus(twist, design, parameters)
     diagnostics.update(more)
     parameters = dataclasses.replace(parameters, torsional_modulus=torsional.value)
-    spread, more = fit_kernel_spread(press, design, parameters)
+    pressure, more = fit_base_pressure([*shear, *twist], press, design, parameters, displacement_gain)
     diagnostics.update(more)
-    parameters = dataclasses.replace(parameters, kernel_spread=spread.value)
-    gain, arm, more = fit_cop([*shear, twist], design, parameters)
-    diagnostics.update(more)
-    parameters = dataclasses.replace(parameters, cop_gain=gain.value, moment_arm=arm.value)
+    parameters = dataclasses.replace(parameters, **{fit.parameter: fit.value for fit in pressure})
+    limit = FitResult("couple_arm_limit", parameters.couple_arm_limit, closed.couple_arm_limit, 0, 0.0, 0.0, "mm",
+                      "not fitted: H / 2, the arm of a bump column whose top cannot turn (reached at bump forces "
+                      "beyond the FEM paths)")
     damping = FitResult("damping_time", parameters.damping_time, closed.damping_time, 0, 0.0, 0.0, "-",
                         "not fitted: quasi-static FEM paths carry no rate; closed-form default kept")
-    return Calibration(design, parameters, (stiffness, radius, tangential, torsional, spread, gain, arm, damping),
+    return Calibration(design, parameters, (stiffness, radius, tangential, torsional, *pressure, limit, damping),
                        diagnostics)

@@ -1,0 +1,82 @@
+"""FEM samples of the reduced-calibration study on disk: every path's per-bump arrays, sensor CoPs and force targets.
+
+A run writes them (``reduced_calibration_samples.npz``) as soon as the FEM paths are solved, so nothing computed is
+lost if a later step fails, and ``python -m studies reduced-calibration --samples FILE`` refits from them without
+solving again.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import fields
+from pathlib import Path
+
+import numpy as np
+
+
+def force_targets(scene) -> np.ndarray:
+    """Per-increment (P [N], F_x [N], F_y [N], T [N mm]) targets of a force-controlled path (last value held)."""
+    from contact.scene import LoadKind
+
+    state = np.zeros(4)
+    rows = []
+    for load in scene.loads:
+        for value in load.values:
+            if load.kind == LoadKind.PRESS:
+                state[0] = value
+            elif load.kind == LoadKind.SHEAR:
+                state[1:3] = value * np.asarray(load.direction) / math.hypot(*load.direction)
+            else:
+                state[3] = value
+            rows.append(state.copy())
+    return np.array(rows)
+
+
+def save_samples(path: Path, fem: dict, scenes: dict) -> Path:
+    """Every FEM path's PathSamples arrays, sensor CoPs and force targets, and the mesh facts, in one .npz.
+
+    Keys "<case>/<field>"; "<case>/provenance" and "mesh" hold JSON text. ``load_samples`` reads it back.
+    """
+    from fem.atomic import atomic_path
+
+    arrays = {"mesh": np.array(json.dumps(fem["mesh"]))}
+    for name, data in fem["paths"].items():
+        for field in fields(data):
+            value = getattr(data, field.name)
+            if isinstance(value, np.ndarray):
+                arrays[f"{name}/{field.name}"] = value
+        arrays[f"{name}/friction"] = np.array(data.friction)
+        arrays[f"{name}/provenance"] = np.array(json.dumps(data.provenance))
+        arrays[f"{name}/sensor_cop"] = fem["sensor_cop"][name]
+        arrays[f"{name}/force_targets"] = force_targets(scenes[name])
+    with atomic_path(path) as temporary, open(temporary, "wb") as stream:      # a stream: np.savez adds no suffix
+        np.savez_compressed(stream, **arrays)
+    return path
+
+
+def load_samples(path, scenes: dict) -> dict:
+    """The FEM paths of ``save_samples`` for these scenes (ValueError naming a missing case or other loads)."""
+    from contact.reduced import PathSamples
+
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"samples={str(path)!r} is not a file (a reduced_calibration_samples.npz of an earlier run)")
+    with np.load(path) as stored:
+        names = {key.split("/")[0] for key in stored.files if "/" in key}
+        missing = sorted(set(scenes) - names)
+        if missing or "mesh" not in stored.files:
+            raise ValueError(f"{path}: no FEM samples for cases {missing or ['mesh']}; it was written by another "
+                             f"plan (--quick or not) or version")
+        paths, sensor_cop = {}, {}
+        array_fields = [f.name for f in fields(PathSamples) if f.name not in ("case", "friction", "provenance")]
+        for name in scenes:
+            targets = force_targets(scenes[name])
+            if not np.allclose(stored[f"{name}/force_targets"], targets):
+                raise ValueError(f"{path}: case {name!r} was run with other loads than this plan's")
+            paths[name] = PathSamples(case=name, friction=float(stored[f"{name}/friction"]),
+                                      provenance=json.loads(str(stored[f"{name}/provenance"])),
+                                      **{field: stored[f"{name}/{field}"] for field in array_fields})
+            sensor_cop[name] = stored[f"{name}/sensor_cop"]
+        mesh = json.loads(str(stored["mesh"]))
+    return {"paths": paths, "sensor_cop": sensor_cop, "mesh": mesh}
