@@ -1,0 +1,156 @@
+"""Incipient-slip controller (controller.incipient_slip) on a quasi-static plant: the reduced array model's own load
+state at the commanded grip, read without sensor error. The controller sees bump forces and load ratios only."""
+
+import ast
+import inspect
+import math
+
+import numpy as np
+import pytest
+
+from contact.reduced import ReducedFingertip
+from controller import GraspPhase
+from controller.incipient_slip import IncipientSlipController, IncipientSlipParameters, array_margin
+
+TIP = ReducedFingertip.calibrated()
+FRAME_STEPS = 10                                     # control steps per sensor frame (1 kHz / 100 Hz)
+SAME_FRAME = (1.0, 1.0)
+STEP = 0.01                                          # log-grid of the plant states (1 %)
+
+
+class QuasiStaticPlant:
+    """Both fingertips carry half the load (F_t [N], T [N mm]) at the commanded grip, the force tracked exactly;
+    states cached on a 1 % grid of the grip (``load_state`` solves a small Newton problem each)."""
+
+    def __init__(self, tangential, torque, friction):
+        self.tangential, self.torque, self.friction = np.asarray(tangential, float), torque, friction
+        self._cache = {}
+
+    def state(self, grip):
+        key = round(math.log(max(grip, 1e-3)) / STEP)
+        if key not in self._cache:
+            self._cache[key] = TIP.load_state(math.exp(STEP * key), 0.5 * self.tangential, 0.5 * self.torque,
+                                              self.friction)
+        return self._cache[key]
+
+    def frame(self, grip):
+        state = self.state(grip)
+        ratio = state.bump_tangential_force / state.normal_force[:, None]
+        # both fingertips in one frame (the controllers below are told so: second_frame = (1, 1))
+        return (np.stack([state.normal_force] * 2), np.stack([ratio, ratio]),
+                np.ones((2, len(TIP.centres)), dtype=bool))
+
+
+def _run(plant, parameters=IncipientSlipParameters(), hold=4.0):
+    """Grasp (the load is there from the start: the object hangs), then hold; log (time, grip, sliding, gross)."""
+    controller = IncipientSlipController(parameters, TIP.centres, SAME_FRAME)
+    controller.minimum_force = 0.5
+    controller.command = 2.0 * plant.tangential[1] if plant.tangential[1] else 1.0
+    log = []
+    for frame in range(int(round(hold * 100))):
+        state = plant.state(controller.command)
+        log.append((frame / 100, controller.command, int(state.sliding.sum()), state.gross_slip))
+        controller.observe(*plant.frame(controller.command))
+        for _ in range(FRAME_STEPS):
+            controller.step(GraspPhase.HOLD)
+    return controller, log
+
+
+@pytest.mark.parametrize("tangential, torque, friction", [((0.0, 2.0), 0.0, 0.7), ((0.0, 1.0), 40.0, 0.5)])
+def test_probe_finds_the_friction_and_holds_near_the_limit(tangential, torque, friction):
+    plant = QuasiStaticPlant(tangential, torque, friction)
+    controller, log = _run(plant)
+    assert controller.slip_seen and len(controller.slip_events) >= 1
+    # the first detection comes when a bump slides (under a moment before the whole grasp does)
+    first = next(i for i, row in enumerate(log) if row[0] >= controller.slip_events[0][0] - 0.011)
+    assert any(row[2] > 0 or row[3] for row in log[max(first - 30, 0):first + 1])
+    assert not any(row[3] for row in log[first + 30:])                  # no gross slip once it has stepped up
+    # mu_hat: the ratio of a bump at its limit (Coulomb, or the combined ellipse under a moment: below mu)
+    assert 0.8 * friction <= controller.friction_estimate <= 1.02 * friction
+    # settled grip: the array's margin 1 / s at mu_hat, i.e. tau / tau_min = mu / (s mu_hat) within the 1 % grid
+    minimum = TIP.minimum_normal_force(0.5 * np.asarray(tangential), 0.5 * torque, friction)
+    ratio = log[-1][1] / minimum
+    expected = friction / (controller.parameters.safety_fraction * controller.friction_estimate)
+    assert ratio == pytest.approx(expected, rel=0.05)
+    assert 1.0 < ratio < 1.5
+
+
+def test_without_rotational_detection_a_moment_is_under_gripped():
+    """A moment-loaded object: the translational demand alone, |F_t| / (s_lift mu_prior) = 0.5 / (0.7 x 0.4) =
+    1.8 N per finger, is below what the array needs against the moment, so the grip falls into gross slip."""
+    plant = QuasiStaticPlant((0.0, 1.0), 40.0, 0.5)
+    parameters = IncipientSlipParameters(rotational_slip_detection=False)
+    controller = IncipientSlipController(parameters, TIP.centres, SAME_FRAME)
+    controller.minimum_force, controller.command = 0.5, 6.0
+    minimum = TIP.minimum_normal_force((0.0, 0.5), 20.0, 0.5)
+    assert 0.5 / (0.7 * 0.4) < minimum
+    for _ in range(100):
+        controller.observe(*plant.frame(controller.command))
+        for _ in range(FRAME_STEPS):
+            controller.step(GraspPhase.LIFT)
+    assert controller.command < minimum and plant.state(controller.command).gross_slip
+    with_detection = IncipientSlipController(IncipientSlipParameters(), TIP.centres, SAME_FRAME)
+    with_detection.minimum_force, with_detection.command = 0.5, 6.0
+    for _ in range(100):
+        with_detection.observe(*plant.frame(with_detection.command))
+        for _ in range(FRAME_STEPS):
+            with_detection.step(GraspPhase.LIFT)
+    # with it: the array's margin 1 / s_lift at mu_prior = 0.4 (the true mu is 0.5)
+    assert with_detection.command > minimum and not plant.state(with_detection.command).gross_slip
+
+
+def test_a_stuck_array_under_a_growing_force_is_not_seen_as_slip():
+    """Stick only (the grip rises, then stays): the watch must stay quiet, whatever the bumps' normal forces do."""
+    plant = QuasiStaticPlant((0.0, 0.6), 10.0, 1.0)
+    controller = IncipientSlipController(IncipientSlipParameters(probe_rate=1e-6), TIP.centres, SAME_FRAME)
+    controller.minimum_force, controller.command = 0.5, 6.0
+    for _ in range(300):
+        controller.observe(*plant.frame(controller.command))
+        for _ in range(FRAME_STEPS):
+            controller.step(GraspPhase.HOLD)
+    assert not controller.slip_seen
+
+
+def test_array_margin_is_the_reduced_models_limit_of_point_contacts():
+    rng = np.random.default_rng(4)
+    for _ in range(5):
+        force = rng.uniform(0.2, 1.5, len(TIP.centres))
+        load, torque = rng.normal(0.0, 1.0, 2), float(rng.normal(0.0, 20.0))
+        margin = array_margin(TIP.centres, force, load, torque, 0.6)[0]
+        reference = TIP.slip_margin(force, np.zeros(len(force)), 0.6, load, torque)[0]
+        # both minimise over the twist directions: a grid refined to 1e-4 of the reach and Nelder-Mead (1e-6)
+        assert margin == pytest.approx(reference, rel=3e-3)
+
+
+def test_the_controller_sees_only_sensor_signals_and_the_phase():
+    """Its interface takes bump forces, load ratios, contacts, the sensor's ratio noise and the phase; no plant."""
+    observe = list(inspect.signature(IncipientSlipController.observe).parameters)
+    step = list(inspect.signature(IncipientSlipController.step).parameters)
+    assert observe == ["self", "bump_force", "load_ratio", "in_contact", "ratio_noise"] and step == ["self", "phase"]
+    tree = ast.parse(inspect.getsource(inspect.getmodule(IncipientSlipController)))
+    imported = {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)} | \
+        {alias.name for node in ast.walk(tree) if isinstance(node, ast.Import) for alias in node.names}
+    assert not any(name and ("mujoco" in name or "closed_loop" in name or "contact" in name) for name in imported)
+    names = {node.id for node in ast.walk(tree) if isinstance(node, ast.Name)} | \
+        {node.attr for node in ast.walk(tree) if isinstance(node, ast.Attribute)}
+    assert not names & {"friction_coefficient", "mass", "moment_nm", "sliding", "gross_slip", "bridge"}
+
+
+@pytest.mark.parametrize("changes, match", [
+    (dict(safety_fraction=1.0), "safety_fraction=1.0 outside"),
+    (dict(prior_friction=0.0), "prior_friction=0.0 outside"),
+    (dict(maximum_friction=0.3), "maximum_friction=0.3 outside"),
+    (dict(probe_rate=-0.1), "probe_rate=-0.1 outside"),
+    (dict(watch_frames=1), "watch_frames=1 must be an integer >= 2"),
+    (dict(confirm_frames=1.5), "confirm_frames=1.5 must be an integer >= 1"),
+    (dict(filter_cutoff_hz=60.0), "filter_cutoff_hz=60.0 outside"),
+    (dict(rotational_slip_detection="yes"), "rotational_slip_detection='yes' must be True or False"),
+])
+def test_bad_controller_parameters_name_the_parameter(changes, match):
+    with pytest.raises(ValueError, match=match):
+        IncipientSlipParameters(**changes)
+
+
+def test_second_frame_must_be_signs():
+    with pytest.raises(ValueError, match="second_frame=.* must be two signs"):
+        IncipientSlipController(IncipientSlipParameters(), TIP.centres, second_frame=(1.0, 0.5))
