@@ -33,14 +33,17 @@ Object-table contact stays MuJoCo's (elliptic cone): it only decides when the ob
 """
 
 
+from ._batch import default_processes, map_trials, run_trials
 from ._bridge import ContactBridge
-from ._sensing import SensingChain
+from ._minimum import MinimumForce, holds_at, minimum_grip_force
+from ._sensing import SensingChain, SensorFrame
 from ._trial import (ACTUATOR_RATE_HZ, ARM_RADIUS, DESIGN_FRICTION, GRAVITY, LOOP_RATE, MM_PER_M, PHYSICS_RATE_HZ,
-                     ROTATION_LIMIT, TABLE_I_OBJECTS, TORQUE_LIMIT, GraspObject, TargetDesign, TrialResult,
-                     TrialSettings, default_tip, random_settings, required_grip_force)
+                     ROTATION_LIMIT, TABLE_I_OBJECTS, TORQUE_LIMIT, ControllerKind, GraspObject, TargetDesign,
+                     TrialResult, TrialSettings, default_tip, random_settings, required_grip_force)
 from ._world import GraspWorld, run_trial
 
-__all__ = ["GraspObject", "TABLE_I_OBJECTS", "TargetDesign", "TrialSettings", "TrialResult", "GraspWorld",
-           "SensingChain", "ContactBridge", "run_trial", "random_settings", "required_grip_force", "default_tip",
-           "DESIGN_FRICTION", "GRAVITY", "MM_PER_M", "PHYSICS_RATE_HZ", "ACTUATOR_RATE_HZ", "LOOP_RATE",
-           "ROTATION_LIMIT", "TORQUE_LIMIT", "ARM_RADIUS"]
+__all__ = ["GraspObject", "TABLE_I_OBJECTS", "TargetDesign", "TrialSettings", "TrialResult", "ControllerKind",
+           "GraspWorld", "SensingChain", "SensorFrame", "ContactBridge", "run_trial", "run_trials", "map_trials",
+           "default_processes", "MinimumForce", "holds_at", "minimum_grip_force", "random_settings",
+           "required_grip_force", "default_tip", "DESIGN_FRICTION", "GRAVITY", "MM_PER_M", "PHYSICS_RATE_HZ",
+           "ACTUATOR_RATE_HZ", "LOOP_RATE", "ROTATION_LIMIT", "TORQUE_LIMIT", "ARM_RADIUS"]

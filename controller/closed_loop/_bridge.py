@@ -85,14 +85,17 @@ class ContactBridge:
     def step(self, data, force_command: float) -> None:
         """Advance gripper and contact by one physics step; leaves the wrenches in ``data.xfrc_applied``."""
         K.physics_step(self.config, self.geometry, self.state, self.bumps, self.out, data.xpos, data.xmat,
-                       data.xipos, data.qvel, data.xfrc_applied, data.mocap_pos, float(force_command))
+                       data.xipos, data.qvel, data.xfrc_applied, data.mocap_pos, np.array([float(force_command)]))
 
-    def run(self, model, data, commands: np.ndarray, lift_targets: np.ndarray) -> None:
-        """``len(commands)`` physics steps (contact step, then ``mj_step``) with grasp-force commands [N] and lift
-        targets [m] per step, in compiled code."""
+    def run(self, model, data, commands: np.ndarray, lift_targets: np.ndarray, grasp_local: np.ndarray,
+            record: np.ndarray) -> None:
+        """``len(commands)`` physics steps (contact step, then ``mj_step``) with grasp-force commands (n, m) [N] (m
+        control steps per physics step) and lift targets (n,) [m], in compiled code; the block's end into
+        ``record`` (``_kernel.R_*``: grip force, object height, grasp point relative to the arm, rotation, sliding
+        bumps) for the grasp point ``grasp_local`` [m] in the object's frame."""
         K.run_block(commands, lift_targets, self.config, self.geometry, self.state, self.bumps, self.out, data.xpos,
                     data.xmat, data.xipos, data.qvel, data.xfrc_applied, data.mocap_pos, data.ctrl, model._address,
-                    data._address, mujoco_step_function())
+                    data._address, mujoco_step_function(), grasp_local, record)
 
     def _field(self, column) -> np.ndarray:
         return self.out[:, column].reshape(2, self.count)

@@ -129,10 +129,11 @@ def _normal_forces(config, geometry, bumps, arm, closing_mm, closing_rate_mm, po
 
 @njit(cache=True)
 def physics_step(config, geometry, state, bumps, out, xpos, xmat, xipos, qvel, xfrc_applied, mocap_pos,
-                 force_command):
+                 force_commands):
     """Advance the gripper and the contact by one physics step (module docstring); write xfrc_applied, mocap_pos.
 
-    ``force_command`` [N] is the grasp-force command held over the step.
+    ``force_commands`` (m,) [N]: the grasp-force commands over the step, each held for 1 / m of it (m = 1 when the
+    controller runs at the physics rate or slower; m > 1 when the physics step spans several control steps).
     """
     obj, arm_body = int(config[C_OBJECT_BODY]), int(config[C_ARM_BODY])
     dof = int(config[C_OBJECT_DOF])
@@ -152,7 +153,8 @@ def physics_step(config, geometry, state, bumps, out, xpos, xmat, xipos, qvel, x
     radius = config[C_ARM_RADIUS]
     forces = np.zeros(count)
     mean = np.zeros(count)
-    for _ in range(substeps):                                                  # 1. gripper at the actuator rate
+    for substep in range(substeps):                                            # 1. gripper at the actuator rate
+        force_command = force_commands[substep * force_commands.size // substeps]
         closing_mm = state[S_CLOSING] * MM
         _normal_forces(config, geometry, bumps, arm, closing_mm, state[S_CLOSING_RATE] * MM, position, rotation,
                        velocity, spin, forces)
@@ -340,16 +342,33 @@ def _cholesky_solve(matrix, right):
     return solution
 
 
+# --- one row of the trial's 100 Hz record, written after each block ---------------------------------------------
+(R_GRIP_FORCE, R_HEIGHT, R_RELATIVE_X, R_RELATIVE_Y, R_RELATIVE_Z, R_ROTATION, R_SLIDING, R_SIZE) = range(8)
+
+
 @njit(cache=True)
 def run_block(commands, lift_targets, config, geometry, state, bumps, out, xpos, xmat, xipos, qvel, xfrc_applied,
-              mocap_pos, ctrl, model_address, data_address, mj_step):
-    """``len(commands)`` physics steps: contact step with commands[j] [N], lift target [m], then MuJoCo's step.
+              mocap_pos, ctrl, model_address, data_address, mj_step, grasp_local, record):
+    """``len(commands)`` physics steps: contact step with commands[j] (m,) [N], lift target [m], then MuJoCo's step;
+    then the record of the block's end into ``record`` (R_SIZE,): grip force per finger [N], object bottom height
+    [m], the object's grasp point (``grasp_local`` [m] in the object's frame) relative to the arm [mm], the object's
+    rotation about the grasp axis [rad], sliding bumps.
 
     ``mj_step`` is MuJoCo's C function (a ctypes function taking the mjModel and mjData addresses), passed as an
     argument so that this loop runs without returning to Python between steps and still caches its compilation.
     """
-    for j in range(commands.size):
+    for j in range(commands.shape[0]):
         ctrl[0] = lift_targets[j]
         physics_step(config, geometry, state, bumps, out, xpos, xmat, xipos, qvel, xfrc_applied, mocap_pos,
                      commands[j])
         mj_step(model_address, data_address)
+    obj, arm = int(config[C_OBJECT_BODY]), int(config[C_ARM_BODY])
+    rotation = xmat[obj].reshape(3, 3)
+    record[R_GRIP_FORCE] = state[S_GRIP_FORCE]
+    record[R_HEIGHT] = xpos[obj, 2] - config[C_HALF_Z] / MM
+    for a in range(3):
+        point = xpos[obj, a] + rotation[a, 0] * grasp_local[0] + rotation[a, 1] * grasp_local[1] \
+            + rotation[a, 2] * grasp_local[2]
+        record[R_RELATIVE_X + a] = (point - xpos[arm, a]) * MM
+    record[R_ROTATION] = math.atan2(rotation[0, 2], rotation[0, 0])
+    record[R_SLIDING] = (out[:, O_SLIDING] > 0.0).sum()

@@ -1,16 +1,22 @@
-"""Sensing chain of the closed loop: reduced model -> base pressure -> sensor -> estimator, and its bench.
+"""Sensing chain of the closed loop: reduced model -> base pressure -> sensor -> estimators, and its bench.
 
-Every frame (100 Hz) each fingertip's bump states become sensor readings (the reduced model's base pressure on the
-paper's 11 x 13 node array, with noise) and the estimator turns the readings into per-bump forces and CoP shifts
-against the unsheared reference at each bump's force. From these the frame carries
+The reduced fingertip's base pressure is linear in each bump's normal force P_i and pressure couple M_i
+(``ReducedFingertip.base_pressure``: a bell carrying P_i and the couple of its overturning moment), so the paper's
+11 x 13 node array reads r = A theta, theta = (P_i, M_i,x, M_i,y) of the k bumps and A (n_nodes, 3k) the sensor's
+response to each, built once per design (``sensor_operator``, checked against sampling the base pressure). Every
+frame (100 Hz) the bump states become readings with noise, and two estimators read them:
 
-* the paper's estimate (eq. 9): the rigid transform of the calibrated shear displacements u_i = g s_i, whose
-  translation u_x and rotation theta drive the displacement-target law (``GraspForceController``);
+* the paper's (eq. 9): per-bump CoP shifts against the unsheared reference at each bump's force, calibrated to
+  shear displacements u_i = g s_i, and their rigid transform, whose translation u_x and rotation theta drive the
+  displacement-target law (``GraspForceController``);
+* the per-bump load: theta_hat = A^+ r, the least-squares bump forces and couples (the sensor model inverted, a
+  calibrated deconvolution), and the load ratio rho_i = M_i / (h(P_i) P_i) ~ Q_i / P_i with h the couple arm of
+  the design, which the incipient-slip controller reads. It separates neighbouring bumps that the CoP regions mix
+  and is linear in the load up to the friction limit, along both axes.
 
 The bench (noise-free, like the FEM bench of Fig. 9) works on the reduced model without any object: the reference
-CoPs against the bump force, the scalar CoP gain and the displacement-law targets. Its fingertip
-states do not depend on the trial and are kept per fingertip design; only the estimator's noise gate changes with a
-trial's noise level.
+CoPs against the bump force, the scalar CoP gain and the displacement-law targets. Its fingertip states do not
+depend on the trial and are kept per fingertip design; only the estimator's noise gate changes with a trial's noise.
 """
 
 from __future__ import annotations
@@ -38,9 +44,13 @@ BENCH_FRICTION = 1.0                   # -, friction of the bench states (their 
 class SensorFrame:
     """What the estimator reports for both fingertips (index 0 left, 1 right) at one sensor frame.
 
-    bump_force (2, k) [N]; in_contact (2, k) bool; cop_shift (2, k, 2) [mm] against the unsheared reference;
-    translation (2, 2) [mm] and rotation (2,) [rad] of the eq. 9 fit of u_i = g s_i; fitted (2,) bool (two bumps or
-    more).
+    The paper's estimator: bump_force (2, k) [N] (readings summed over each bump's nodes); in_contact (2, k) bool;
+    cop_shift (2, k, 2) [mm] against the unsheared reference; translation (2, 2) [mm] and rotation (2,) [rad] of
+    the eq. 9 fit of u_i = g s_i; fitted (2,) bool (two bumps or more); what the displacement-target law sees,
+    the larger of the two fingertips: shear_displacement u_x [mm], twist_angle theta [rad], contact_count. The
+    per-bump load: normal_force (2, k) [N] and load_ratio (2, k, 2) [-] (A^+ r; 0 where normal_force is at most
+    the contact threshold), loaded (2, k) bool, and ratio_noise (2, k) [-], the standard deviation the sensor
+    noise gives each ratio (the larger of its two components).
     """
 
     bump_force: np.ndarray
@@ -49,22 +59,13 @@ class SensorFrame:
     translation: np.ndarray
     rotation: np.ndarray
     fitted: np.ndarray
-
-    @property
-    def shear_displacement(self) -> float:
-        """u_x [mm] the displacement-target law sees: the larger |translation| of the two fingertips."""
-        return float(max(np.hypot(*self.translation[f]) for f in range(2) if self.fitted[f])) \
-            if self.fitted.any() else 0.0
-
-    @property
-    def twist_angle(self) -> float:
-        """theta [rad] the displacement-target law sees: the larger |rotation| of the two fingertips."""
-        return float(np.abs(self.rotation[self.fitted]).max()) if self.fitted.any() else 0.0
-
-    @property
-    def contact_count(self) -> int:
-        """Bumps in contact on the fingertip that sees more of them."""
-        return int(self.in_contact.sum(axis=1).max())
+    shear_displacement: float
+    twist_angle: float
+    contact_count: int
+    normal_force: np.ndarray
+    load_ratio: np.ndarray
+    loaded: np.ndarray
+    ratio_noise: np.ndarray
 
 
 class SensingChain:
@@ -90,37 +91,42 @@ class SensingChain:
         # at low force (a biased magnitude the controller regulates instead of the shear); the gate in turn biases
         # the CoP of a bump's rim in a force-dependent way, which the bench below sees as well
         self.settings = EstimatorSettings(contact_threshold=max(0.02, 10.0 * noise), node_floor=3.0 * noise)
-        self._operator, self._region = _geometry(tip, self.array, self.layout)
+        self.operator, self._inverse, self._region = sensor_operator(tip, self.array, self.layout)
+        count = len(tip.centres)
+        # standard deviation of each bump's couple estimate per unit node noise [N mm per N]: A^+ rows' norms
+        self._couple_noise = np.sqrt((self._inverse[count:] ** 2).sum(axis=1)).reshape(2, count).max(axis=0)
         node = self.array.node_positions.reshape(-1, 2)
         self._node_x, self._node_y = node[:, 0].copy(), node[:, 1].copy()
         self._centres = self.layout.centre_array
-        p, grid = tip.parameters, self.grid
-        self._model = np.array([p.kernel_spread, p.cop_gain, p.moment_arm, tip.max_kernel_shift, self.array.offset,
-                                self.array.quantization_step, self.settings.node_floor,
-                                self.settings.contact_threshold])
-        self._grid = np.array([grid.x[0], grid.y[0], grid.spacing, len(grid.x), len(grid.y)])
+        p = tip.parameters
+        self._couple_law = np.array([p.couple_arm, p.couple_arm_slope, p.couple_arm_limit, p.displacement_gain])
         self._bench = _bench_states(tip)
         self.reference_table = self._reference_table()
         self.calibration = self._calibrate()
 
     # --- readings ---------------------------------------------------------------------------------------------
     def readings(self, bump_force, radius, shear, tangential, noisy: bool = True) -> np.ndarray:
-        """Sensor readings (ny, nx) [N] of one fingertip's bump states (k,) / (k, 2) (noise unless ``noisy``)."""
-        count = len(self._centres)
-        centre_x, centre_y, width = np.empty(count), np.empty(count), np.empty(count)
-        bump_force = np.ascontiguousarray(bump_force, dtype=float)
-        S.kernel_geometry(bump_force, np.ascontiguousarray(radius, dtype=float),
-                          np.ascontiguousarray(shear, dtype=float), np.ascontiguousarray(tangential, dtype=float),
-                          self.tip.centres, *self._model[:4], centre_x, centre_y, width)
-        flat = np.empty(self.array.shape[0] * self.array.shape[1])
-        S.kernel_readings(flat, *self._grid[:3], int(self._grid[3]), int(self._grid[4]), centre_x, centre_y, width,
-                          bump_force, *self._operator)
-        flat += self.array.offset
+        """Sensor readings (ny, nx) [N] of one fingertip's bump states (k,) / (k, 2) (noise unless ``noisy``).
+
+        ``radius`` is accepted for the bump-state signature; the base pressure does not depend on it."""
+        flat = self._noiseless(np.asarray(bump_force, dtype=float)[None], np.asarray(shear, dtype=float)[None],
+                               np.asarray(tangential, dtype=float)[None])[0]
+        return self._read_out(flat, noisy).reshape(self.array.shape)
+
+    def _noiseless(self, bump_force, shear, tangential) -> np.ndarray:
+        """A theta for bump states (m, k), (m, k, 2), (m, k, 2): readings (m, n_nodes) [N] before the read-out."""
+        couple = self.tip.couple(bump_force, shear, tangential)                          # (m, k, 2) [N mm]
+        theta = np.concatenate([bump_force, couple[..., 0], couple[..., 1]], axis=-1)    # (m, 3k)
+        return theta @ self.operator.T
+
+    def _read_out(self, readings, noisy: bool) -> np.ndarray:
+        """Offset, noise (unless ``noisy`` is False) and quantization of readings (..., n_nodes) [N]."""
+        readings = readings + self.array.offset
         if noisy and self.array.noise_std > 0.0:
-            flat += self.rng.normal(0.0, self.array.noise_std, flat.shape)
+            readings = readings + self.rng.normal(0.0, self.array.noise_std, readings.shape)
         if self.array.quantization_step > 0.0:
-            flat = np.round(flat / self.array.quantization_step) * self.array.quantization_step
-        return flat.reshape(self.array.shape)
+            readings = np.round(readings / self.array.quantization_step) * self.array.quantization_step
+        return readings
 
     def _state_readings(self, states) -> np.ndarray:
         """Noise-free readings (t, ny, nx) of bench states (dicts of per-bump arrays)."""
@@ -129,18 +135,38 @@ class SensingChain:
 
     # --- one frame --------------------------------------------------------------------------------------------
     def sense(self, bridge) -> SensorFrame:
-        """The estimator's view of both fingertips at the bridge's current state (one sensor frame)."""
-        count = len(self._centres)
-        noise = self.rng.normal(0.0, self.array.noise_std, (2, self._node_x.size)) if self.array.noise_std > 0.0 \
-            else np.zeros((2, self._node_x.size))
+        """Both estimators' view of the two fingertips at the bridge's current state (one sensor frame)."""
+        count, nodes = len(self._centres), self._node_x.size
+        noise = self.rng.normal(0.0, self.array.noise_std, (2, nodes)) if self.array.noise_std > 0.0 \
+            else np.zeros((2, nodes))
+        readings, normal, ratio = np.empty((2, nodes)), np.empty((2, count)), np.empty((2, count, 2))
         force, shift, fit = np.empty((2, count)), np.empty((2, count, 2)), np.empty((2, 4))
         table_force, table_cop = self.reference_table
-        S.sense_frame(bridge.normal_force, bridge.contact_radius, bridge.shear_displacement, bridge.tangential_force,
-                      noise, self._model, self._grid, *self._operator, self._region, self._node_x, self._node_y,
-                      self._centres, table_force, table_cop, self.calibration.gain, force, shift, fit)
+        threshold = self.settings.contact_threshold
+        u_x, theta, contacts = S.sense_frame(
+            bridge.normal_force, bridge.shear_displacement, bridge.tangential_force, noise, self._couple_law,
+            self.operator, self._inverse, self.array.offset, self.array.quantization_step, threshold, self._region,
+            self._node_x, self._node_y, self.settings.node_floor, self._centres, table_force, table_cop,
+            self.calibration.gain, readings, normal, ratio, force, shift, fit)
         fitted = fit[:, 0] >= 2
-        return SensorFrame(force, force > self.settings.contact_threshold, shift, fit[:, 2:],
-                           np.where(fitted, fit[:, 1], 0.0), fitted)
+        loaded = normal > threshold
+        safe = np.where(loaded, normal, 1.0)
+        ratio_noise = np.where(loaded, self.array.noise_std * self._couple_noise
+                               / (self.tip.parameters.couple_arm_at(safe) * safe), 0.0)
+        return SensorFrame(force, force > threshold, shift, fit[:, 2:], np.where(fitted, fit[:, 1], 0.0), fitted,
+                           u_x, theta, contacts, normal, ratio, loaded, ratio_noise)
+
+    def bump_loads(self, readings):
+        """Per-bump normal force (m, k) [N], load ratio (m, k, 2) [-] and loaded (m, k) bool of readings
+        (m, n_nodes): theta = A^+ (r - offset), rho_i = M_i / (h(P_i) P_i) (module docstring)."""
+        theta = (np.asarray(readings) - self.array.offset) @ self._inverse.T                # (m, 3k)
+        count = len(self._centres)
+        normal, couple = theta[:, :count], np.stack([theta[:, count:2 * count], theta[:, 2 * count:]], axis=-1)
+        loaded = normal > self.settings.contact_threshold
+        safe = np.where(loaded, normal, 1.0)
+        arm = self.tip.parameters.couple_arm_at(safe)
+        ratio = np.where(loaded[..., None], couple / (arm * safe)[..., None], 0.0)
+        return normal, ratio, loaded
 
     # --- bench ------------------------------------------------------------------------------------------------
     def _reference_table(self):
@@ -207,23 +233,49 @@ def _tip_key(tip: ReducedFingertip) -> str:
     return json.dumps(tip.to_dict(), sort_keys=True)
 
 
-_GEOMETRY: dict = {}
+_OPERATORS: dict = {}
+LINEARITY_TOLERANCE = 1e-9        # relative: A theta against the sampled base pressure of a loaded state
 
 
-def _geometry(tip: ReducedFingertip, array: SensorArray, layout: BumpLayout):
-    """Cell-force operator of the base grid in CSC form (indptr, indices, weights) and the bump of each sensor node
-    (n_nodes,) int, cached per design, parameters and array geometry (not noise)."""
+def sensor_operator(tip: ReducedFingertip, array: SensorArray, layout: BumpLayout):
+    """The sensor's response A (n_nodes, 3k) [N per N, N per N mm] to each bump's normal force and couple
+    components, its pseudo-inverse (3k, n_nodes) and the bump of each node (n_nodes,) for the CoP regions; cached per
+    design, parameters and array geometry.
+
+    Columns: the base pressure of a unit bump force, and of a unit couple along x and y (a bump with P_i = 0 and
+    Q_i = e / h(0)), each integrated over the cells (``cell_force_operator``). Raises ValueError if the base pressure
+    is not linear in (P_i, M_i) (a state's sampled pressure differs from A theta).
+    """
     key = (_tip_key(tip), array.pitch, array.node_counts, array.centre, layout)
-    if key not in _GEOMETRY:
+    if key not in _OPERATORS:
+        count = len(tip.centres)
         grid = tip.base_grid(GRID_SPACING)
         field = PressureField.from_grid(grid.x, grid.y, np.zeros((len(grid.y), len(grid.x))))
-        operator = cell_force_operator(field.positions, field.triangles, array).tocsc()
-        operator.sort_indices()
-        regions = layout.regions(array).reshape(len(layout.centres), -1)                  # (k, n_nodes)
+        cells = cell_force_operator(field.positions, field.triangles, array)
+        zeros = np.zeros((count, 2))
+        arm = float(tip.parameters.couple_arm_at(0.0))
+        columns = []
+        for kind in range(3):
+            for bump in range(count):
+                force, tangential = np.zeros(count), zeros.copy()
+                if kind == 0:
+                    force[bump] = 1.0
+                else:
+                    tangential[bump, kind - 1] = 1.0 / arm
+                pressure = tip.base_pressure(grid, force, np.zeros(count), zeros, tangential)
+                columns.append(cells @ pressure.ravel())
+        operator = np.stack(columns, axis=1)                                                 # (n_nodes, 3k)
+        state = tip.load_state(6.0, (1.0, -1.5), 12.0, 1.0)
+        sampled = cells @ tip.state_pressure(grid, state).ravel()
+        couple = tip.couple(state.normal_force, state.shear_displacement, state.bump_tangential_force)
+        predicted = operator @ np.concatenate([state.normal_force, couple[:, 0], couple[:, 1]])
+        if np.abs(predicted - sampled).max() > LINEARITY_TOLERANCE * np.abs(sampled).max():
+            raise ValueError("the fingertip's base pressure is not linear in the bumps' forces and couples; "
+                             "the sensing chain needs ReducedFingertip.base_pressure of that form")
+        regions = layout.regions(array).reshape(count, -1)                                   # (k, n_nodes)
         region = np.where(regions.any(axis=0), np.argmax(regions, axis=0), -1)
-        _GEOMETRY[key] = ((operator.indptr.astype(np.int64), operator.indices.astype(np.int64), operator.data),
-                          region.astype(np.int64))
-    return _GEOMETRY[key]
+        _OPERATORS[key] = (operator, np.linalg.pinv(operator), region.astype(np.int64))
+    return _OPERATORS[key]
 
 
 def _displacement_states(tip: ReducedFingertip, total_force: float, translations, rotations) -> list[dict]:

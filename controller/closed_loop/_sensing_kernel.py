@@ -1,12 +1,9 @@
-"""Compiled sensing of the closed loop: base-pressure kernels -> sensor cells, per-bump force and CoP, rigid fit.
+"""Compiled form of the paper's estimator for the closed loop: per-bump force and CoP, reference, rigid fit.
 
-The same computations as ``ReducedFingertip.base_pressure`` sampled by ``controller.sensor.sample`` (paraboloid
-kernels normalised on the grid, integrated exactly over the cells by the cell-force operator), as
-``controller.estimator.bump_positions`` (force and centre of pressure per bump region above a noise gate) and as
-``controller.rigid_transform.fit_rigid_transform`` (2D Procrustes), for one fingertip frame at a time: the closed
-loop reads 2 fingertips at 100 Hz, where the vectorised library functions spend milliseconds in array set-up per
-frame. The tests check both against the library functions. A kernel only visits the grid points under its support,
-and the cell operator is stored by grid point (CSC) so each point scatters into its few cells.
+The same computations as ``controller.estimator.bump_positions`` (force and centre of pressure per bump region above
+a noise gate), the bench's reference table and ``controller.rigid_transform.fit_rigid_transform`` (2D Procrustes),
+for one frame of two fingertips: the closed loop reads them at 100 Hz, where the vectorised library functions spend
+milliseconds in array set-up per frame. The tests check them against the library functions.
 """
 
 from __future__ import annotations
@@ -15,43 +12,6 @@ import math
 
 import numpy as np
 from numba import njit
-
-
-@njit(cache=True)
-def kernel_readings(readings, x0, y0, spacing, nx, ny, centre_x, centre_y, width, force, indptr, indices, weights):
-    """Cell readings [N] (n_cells,) of sum_i P_i K((x - c_i) / w_i) / (h^2 sum_grid K), K(r) = max(1 - r^2, 0).
-
-    Grid: x0 + i h, y0 + j h (i < nx, j < ny), point j nx + i; (indptr, indices, weights): the cell-force operator
-    in CSC form (column = grid point). Bumps with P_i <= 0 add nothing.
-    """
-    readings[:] = 0.0
-    for bump in range(force.size):
-        if not force[bump] > 0.0:
-            continue
-        cx, cy, w = centre_x[bump], centre_y[bump], width[bump]
-        low_x = max(int(math.ceil((cx - w - x0) / spacing)), 0)
-        high_x = min(int(math.floor((cx + w - x0) / spacing)), nx - 1)
-        low_y = max(int(math.ceil((cy - w - y0) / spacing)), 0)
-        high_y = min(int(math.floor((cy + w - y0) / spacing)), ny - 1)
-        size = max(high_x - low_x + 1, 0) * max(high_y - low_y + 1, 0)
-        values, points = np.empty(size), np.empty(size, dtype=np.int64)
-        used, total = 0, 0.0
-        for j in range(low_y, high_y + 1):
-            dy = (y0 + j * spacing - cy) / w
-            for i in range(low_x, high_x + 1):
-                dx = (x0 + i * spacing - cx) / w
-                value = 1.0 - dx * dx - dy * dy
-                if value > 0.0:
-                    values[used], points[used] = value, j * nx + i
-                    used += 1
-                    total += value
-        if not total > 0.0:
-            continue
-        scale = force[bump] / (total * spacing * spacing)
-        for n in range(used):
-            point = points[n]
-            for entry in range(indptr[point], indptr[point + 1]):
-                readings[indices[entry]] += weights[entry] * scale * values[n]
 
 
 @njit(cache=True)
@@ -126,54 +86,99 @@ def reference_at(force, table_force, table_cop, reference):
 
 
 @njit(cache=True)
-def kernel_geometry(bump_force, radius, shear, tangential, centres, kernel_spread, cop_gain, moment_arm, max_shift,
-                    centre_x, centre_y, width):
-    """Kernel centres [mm] and widths [mm] of ``ReducedFingertip.base_pressure`` for one fingertip (same law):
-    w_i = sqrt(a_i^2 + s^2), c_i = r_i + g delta_i + h Q_i / P_i, the shift capped at ``max_shift``."""
-    for i in range(bump_force.size):
-        width[i] = math.sqrt(radius[i] * radius[i] + kernel_spread * kernel_spread)
-        safe = bump_force[i] if bump_force[i] > 0.0 else 1.0
-        shift_x = cop_gain * shear[i, 0] + moment_arm * tangential[i, 0] / safe
-        shift_y = cop_gain * shear[i, 1] + moment_arm * tangential[i, 1] / safe
-        length = math.hypot(shift_x, shift_y)
-        scale = min(1.0, max_shift / length) if length > 0.0 else 1.0
-        centre_x[i] = centres[i, 0] + scale * shift_x
-        centre_y[i] = centres[i, 1] + scale * shift_y
-
-
-@njit(cache=True)
-def sense_frame(normal, radius, shear, tangential, noise, model, grid, indptr, indices, weights, region, node_x,
-                node_y, centres, table_force, table_cop, cop_gain_to_shear, force, shift, fit):
-    """One sensor frame of both fingertips, the compiled form of ``SensingChain.sense``.
-
-    Inputs per fingertip f (2, k, ...): bump normal force [N], contact radius [mm], elastic shear [mm], tangential
-    force [N]; noise (2, n_nodes) [N] added to the readings. ``model`` = (kernel_spread, cop_gain, moment_arm,
-    max_shift, offset, quantization_step, node_floor, contact_threshold); ``grid`` = (x0, y0, spacing, nx, ny).
-    Outputs: force (2, k) [N], shift (2, k, 2) [mm] (0 where not in contact), fit (2, 4) = (bumps used, rotation [rad], t_x, t_y [mm]) of the eq. 9 fit of u_i = g shift_i.
-    """
+def estimate_frame(readings, region, node_x, node_y, node_floor, threshold, centres, table_force, table_cop,
+                   cop_gain_to_shear, force, shift, fit):
+    """The paper's estimator on one frame of both fingertips' readings (2, n_nodes) [N]: per-bump force (2, k)
+    [N] and CoP shift (2, k, 2) [mm] against the unsheared reference at the bump's force (0 where the force is at
+    most ``threshold``), and fit (2, 4) = (bumps used, rotation [rad], t_x, t_y [mm]) of the eq. 9 fit of
+    u_i = g shift_i (``SensingChain.sense``)."""
     count = centres.shape[0]
-    centre_x, centre_y, width = np.empty(count), np.empty(count), np.empty(count)
-    readings = np.empty(node_x.size)
     cop = np.empty((count, 2))
     reference = np.empty((count, 2))
     current = np.empty((count, 2))
     used = np.empty(count, dtype=np.bool_)
     for f in range(2):
-        kernel_geometry(normal[f], radius[f], shear[f], tangential[f], centres, model[0], model[1], model[2],
-                        model[3], centre_x, centre_y, width)
-        kernel_readings(readings, grid[0], grid[1], grid[2], int(grid[3]), int(grid[4]), centre_x, centre_y, width,
-                        normal[f], indptr, indices, weights)
-        for node in range(readings.size):
-            value = readings[node] + model[4] + noise[f, node]
-            if model[5] > 0.0:
-                value = np.round(value / model[5]) * model[5]
-            readings[node] = value
-        bump_forces_and_cops(readings, region, node_x, node_y, model[6], centres, force[f], cop)
+        bump_forces_and_cops(readings[f], region, node_x, node_y, node_floor, centres, force[f], cop)
         reference_at(force[f], table_force, table_cop, reference)
         for i in range(count):
-            used[i] = force[f, i] > model[7]
+            used[i] = force[f, i] > threshold
             for axis in range(2):
                 shift[f, i, axis] = cop[i, axis] - reference[i, axis] if used[i] else 0.0
                 current[i, axis] = reference[i, axis] + cop_gain_to_shear * shift[f, i, axis]
         number, rotation, t_x, t_y = rigid_fit(reference, current, used)
         fit[f, 0], fit[f, 1], fit[f, 2], fit[f, 3] = number, rotation, t_x, t_y
+
+
+@njit(cache=True)
+def couple_arm(bump_force, arm, slope, limit):
+    """h(P) [mm] of ``ReducedParameters.couple_arm_at``: limit + (arm - limit) / (1 + slope P / (arm - limit))."""
+    if slope == 0.0:
+        return arm
+    excess = arm - limit
+    return limit + excess / (1.0 + (slope / excess) * max(bump_force, 0.0))
+
+
+@njit(cache=True)
+def sense_loads(normal, shear, tangential, noise, couple_law, operator, inverse, offset, quantization, threshold,
+                readings, load_force, load_ratio):
+    """Readings of both fingertips and the per-bump loads read back from them (``SensingChain.sense``).
+
+    normal (2, k) [N], shear (2, k, 2) [mm], tangential (2, k, 2) [N]: the bump states; noise (2, n) [N];
+    couple_law = (h_0, kappa, h_inf, g) of ``ReducedFingertip.couple``; operator A (n, 3k), inverse A^+ (3k, n).
+    Writes readings (2, n) [N] (A theta + offset + noise, quantized), load_force (2, k) [N] and load_ratio
+    (2, k, 2) [-] = M / (h(P) P) of theta = A^+ (readings - offset), 0 where the force is at most ``threshold``.
+    """
+    count = normal.shape[1]
+    theta = np.empty(3 * count)
+    for f in range(2):
+        for i in range(count):
+            arm = couple_arm(normal[f, i], couple_law[0], couple_law[1], couple_law[2])
+            theta[i] = normal[f, i]
+            for axis in range(2):
+                theta[count * (1 + axis) + i] = arm * tangential[f, i, axis] + \
+                    couple_law[3] * normal[f, i] * shear[f, i, axis]
+        for node in range(operator.shape[0]):
+            value = offset + noise[f, node]
+            for j in range(3 * count):
+                value += operator[node, j] * theta[j]
+            if quantization > 0.0:
+                value = np.round(value / quantization) * quantization
+            readings[f, node] = value
+        for j in range(3 * count):
+            value = 0.0
+            for node in range(operator.shape[0]):
+                value += inverse[j, node] * (readings[f, node] - offset)
+            theta[j] = value
+        for i in range(count):
+            force = theta[i]
+            load_force[f, i] = force
+            if force > threshold:
+                scale = 1.0 / (couple_arm(force, couple_law[0], couple_law[1], couple_law[2]) * force)
+                load_ratio[f, i, 0] = theta[count + i] * scale
+                load_ratio[f, i, 1] = theta[2 * count + i] * scale
+            else:
+                load_ratio[f, i, 0] = load_ratio[f, i, 1] = 0.0
+
+
+@njit(cache=True)
+def sense_frame(normal, shear, tangential, noise, couple_law, operator, inverse, offset, quantization, threshold,
+                region, node_x, node_y, node_floor, centres, table_force, table_cop, cop_gain_to_shear, readings,
+                load_force, load_ratio, force, shift, fit):
+    """One sensor frame of both fingertips: ``sense_loads`` then ``estimate_frame``; returns the paper's inputs
+    (u_x [mm], theta [rad], bumps in contact on the fingertip that sees more), the larger of the two fingertips."""
+    sense_loads(normal, shear, tangential, noise, couple_law, operator, inverse, offset, quantization, threshold,
+                readings, load_force, load_ratio)
+    estimate_frame(readings, region, node_x, node_y, node_floor, threshold, centres, table_force, table_cop,
+                   cop_gain_to_shear, force, shift, fit)
+    translation = rotation = 0.0
+    contacts = 0
+    for f in range(2):
+        count = 0
+        for i in range(force.shape[1]):
+            if force[f, i] > threshold:
+                count += 1
+        contacts = max(contacts, count)
+        if fit[f, 0] >= 2:
+            translation = max(translation, math.hypot(fit[f, 2], fit[f, 3]))
+            rotation = max(rotation, abs(fit[f, 1]))
+    return translation, rotation, contacts

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import enum
 import functools
 import math
 from dataclasses import dataclass, field
@@ -17,7 +18,7 @@ MM_PER_M = 1000.0
 # MuJoCo step and contact update [Hz]. The contact is coupled implicitly (``_kernel``): an explicit update needed
 # omega dt <= 0.35 and c dt / m <= 0.9 at the stiffest contact (4 kHz for the light eclair between two calibrated
 # fingertips; at 2 kHz it rattled between the fingers and turned out).
-PHYSICS_RATE_HZ = 1000.0
+PHYSICS_RATE_HZ = 500.0
 ACTUATOR_RATE_HZ = 8000.0           # Acceleration Control + DOB, sub-stepped in the contact kernel (paper: 8 kHz)
 DESIGN_FRICTION = 0.4               # lowest friction the controller targets are designed for (mu range 0.4-1.0)
 APPROACH_GAP_M = 0.001              # initial gap between each bump tip and the object face
@@ -103,14 +104,21 @@ class TargetDesign:
         check_range("targets.torque_ratio", self.torque_ratio, 0.0, 1.0, low_open=True, high_open=True)
 
 
+class ControllerKind(enum.Enum):
+    """The grasp-force controller of a trial."""
+
+    INCIPIENT_SLIP = "incipient_slip"                 # controller.incipient_slip: per-bump load ratios, probe
+    DISPLACEMENT_TARGETS = "displacement_targets"     # controller.grasp_force_control: u_x, theta to targets
+
+
 @dataclass(frozen=True)
 class TrialSettings:
     """One trial: friction fingertip-object, grasp-position jitter (along x, z) [m], object yaw misalignment [rad]
     (the bumps touch one after the other), sensor noise [N per node], constant_force [N] (None: the grasp
     controller; a number: that force throughout, for tau_min), phase durations [s], seed, what the
     controller's targets are designed for (TargetDesign), the MuJoCo / contact rate and the actuator-loop rate [Hz]
-    (an integer multiple of it), and whether the contact is coupled implicitly (False: explicitly, for
-    comparison)."""
+    (an integer multiple of it), whether the contact is coupled implicitly (False: explicitly, for
+    comparison) and the controller (ControllerKind; TargetDesign applies to DISPLACEMENT_TARGETS)."""
 
     friction_coefficient: float = 0.8
     grasp_offset: tuple[float, float] = (0.0, 0.0)
@@ -125,8 +133,14 @@ class TrialSettings:
     physics_rate_hz: float = PHYSICS_RATE_HZ
     actuator_rate_hz: float = ACTUATOR_RATE_HZ
     implicit_coupling: bool = True
+    controller: ControllerKind = ControllerKind.INCIPIENT_SLIP
 
     def __post_init__(self):
+        try:
+            object.__setattr__(self, "controller", ControllerKind(self.controller))
+        except ValueError:
+            raise ValueError(f"controller={self.controller!r} is not one of "
+                             f"{[kind.value for kind in ControllerKind]}") from None
         check_positive("friction_coefficient", self.friction_coefficient)
         if len(self.grasp_offset) != 2:
             raise ValueError(f"grasp_offset={self.grasp_offset!r} must be (along x, in height) [m]")
@@ -157,7 +171,10 @@ class TrialResult:
     the crush force), success, plus statistics: forces [N] per finger, creep [um/s] and rotation creep [mrad/s] of
     the grasp point relative to the gripper after the first 0.5 s of the hold, the largest rotation of the object
     in the grasp during lift and hold [mrad] and ``rotated`` (beyond ROTATION_LIMIT: it turned out of the grasp,
-    which the paper's success criterion - no table contact - does not count)."""
+    which the paper's success criterion - no table contact - does not count). ``hold_force_settled`` [N] is the
+    mean grip over the last second of the hold (the force the controller settled at: Fig. 11's tau);
+    ``friction_estimate`` and ``slip_events`` ((time [s], estimate) per detection) are the incipient-slip
+    controller's own (NaN and empty for the displacement-target law)."""
 
     object_name: str
     settings: TrialSettings
@@ -167,8 +184,11 @@ class TrialResult:
     crushed: bool = False
     hold_force_mean: float = math.nan
     hold_force_max: float = math.nan
+    hold_force_settled: float = math.nan
     max_force: float = math.nan
     minimum_force: float = math.nan
+    friction_estimate: float = math.nan
+    slip_events: list = field(default_factory=list)
     creep_um_per_s: float = math.nan
     rotation_creep_mrad_per_s: float = math.nan
     hold_slip_mm: float = math.nan

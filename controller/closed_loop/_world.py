@@ -17,18 +17,14 @@ import numpy as np
 from contact.reduced import ReducedFingertip
 from controller.acceleration_control import AccelerationControlParameters
 from controller.grasp_force_control import GraspForceController, GraspForceParameters
-from controller.multirate import rate_ratio
+from controller.incipient_slip import IncipientSlipController, IncipientSlipParameters
 from controller.references import GraspPhase
 
+from . import _kernel as K
 from ._bridge import ContactBridge
 from ._sensing import SensingChain
 from ._trial import (APPROACH_GAP_M, ARM_RADIUS, GRAVITY, LIFT_HEIGHT_M, LOOP_RATE, MM_PER_M, TABLE_CLEARANCE_M,
-                     TORQUE_LIMIT, GraspObject, TrialResult, TrialSettings, default_tip)
-
-
-def _min_jerk(progress):
-    s = min(max(progress, 0.0), 1.0)
-    return s**3 * (10.0 - 15.0 * s + 6.0 * s**2)
+                     TORQUE_LIMIT, ControllerKind, GraspObject, TrialResult, TrialSettings, default_tip)
 
 
 def _mjcf(obj: GraspObject, settings: TrialSettings, tip: ReducedFingertip) -> str:
@@ -76,11 +72,13 @@ class GraspWorld:
     obj : GraspObject
     settings : TrialSettings
     tip : ReducedFingertip -- both fingertips (default: the FEM-calibrated 3x3 design, ``default_tip``).
-    grasp_parameters : GraspForceParameters -- the controller (rotational detection is taken from ``settings``).
+    controller_parameters : IncipientSlipParameters or GraspForceParameters, optional -- the controller's
+        parameters, of the kind ``settings.controller`` names (rotational detection is taken from ``settings``).
     """
 
     def __init__(self, obj: GraspObject, settings: TrialSettings | None = None,
-                 tip: ReducedFingertip | None = None, grasp_parameters: GraspForceParameters | None = None):
+                 tip: ReducedFingertip | None = None,
+                 controller_parameters: IncipientSlipParameters | GraspForceParameters | None = None):
         import mujoco
 
         settings = TrialSettings() if settings is None else settings
@@ -96,21 +94,22 @@ class GraspWorld:
         self.bridge = ContactBridge(self.model, self.tip, obj, settings.friction_coefficient, self.acceleration_parameters,
                                     0.5 * obj.size[1] + APPROACH_GAP_M, settings.implicit_coupling)
         self.sensing = SensingChain(self.tip, settings.sensor_noise, self.rng, settings.targets)
-        base = GraspForceParameters(approach_force=0.5, maximum_force=TORQUE_LIMIT / ARM_RADIUS, loop_rate=LOOP_RATE) \
-            if grasp_parameters is None else grasp_parameters
-        self.grasp = GraspForceController(replace(base, rotational_slip_detection=settings.rotational_slip_detection),
-                                          self.sensing.design_references())
+        self.grasp = _controller(settings, controller_parameters, self.sensing, self.tip)
         ids = {name: mujoco.mj_name2id(self.model, kind, name) for kind, name in (
             (mujoco.mjtObj.mjOBJ_GEOM, "table"), (mujoco.mjtObj.mjOBJ_GEOM, "object"))}
         self.table_geom, self.object_geom = ids["table"], ids["object"]
         self.object_body, self.arm_body = self.bridge.object_id, self.bridge.arm_id
         self.schedule = self._schedule()
-        for name, rate in (("grasp-force loop", self.grasp.parameters.sample_rate_hz),
-                           ("sensor", self.sensing.array.sample_rate_hz)):
-            whole = settings.physics_rate_hz / rate
+        control, sensor = self.grasp.parameters.sample_rate_hz, self.sensing.array.sample_rate_hz
+        for name, fast, slow in (("physics_rate_hz", settings.physics_rate_hz, sensor),
+                                 ("the grasp-force loop rate", control, sensor)):
+            whole = fast / slow
             if whole < 1.0 or abs(whole - round(whole)) > 1e-9 * whole:
-                raise ValueError(f"physics_rate_hz={settings.physics_rate_hz!r} must be an integer multiple of the "
-                                 f"{name} rate {rate!r} Hz")
+                raise ValueError(f"{name}={fast!r} Hz must be an integer multiple of the sensor rate {slow!r} Hz")
+        ratio = max(settings.physics_rate_hz, control) / min(settings.physics_rate_hz, control)
+        if abs(ratio - round(ratio)) > 1e-9 * ratio:
+            raise ValueError(f"physics_rate_hz={settings.physics_rate_hz!r} and the grasp-force loop rate {control!r} "
+                             f"Hz must be integer multiples of one another")
 
     def _schedule(self):
         """[(end time [s], phase)] of the sequence."""
@@ -124,114 +123,113 @@ class GraspWorld:
             schedule.append((end, GraspPhase(name)))
         return schedule
 
-    def _phase_at(self, time_s):
-        for index, (end, phase) in enumerate(self.schedule):
-            if time_s < end:
-                start = self.schedule[index - 1][0] if index else 0.0
-                return phase, (time_s - start) / (end - start)
-        return None, 1.0
+    def _phases(self, times):
+        """Phase (list of GraspPhase) and progress through it (array) at each of ``times`` [s] (the last phase's
+        end and beyond count as its end)."""
+        ends = np.array([end for end, _ in self.schedule])
+        starts = np.concatenate([[0.0], ends[:-1]])
+        index = np.minimum(np.searchsorted(ends, times, side="right"), len(ends) - 1)
+        progress = np.clip((times - starts[index]) / (ends[index] - starts[index]), 0.0, 1.0)
+        return [self.schedule[i][1] for i in index], progress
 
-    def _lift_height_m(self, phase, progress) -> float:
-        if phase is GraspPhase.LIFT:
-            return LIFT_HEIGHT_M * _min_jerk(progress)
-        if phase is GraspPhase.HOLD:
-            return LIFT_HEIGHT_M
-        if phase is GraspPhase.PLACE:
-            return LIFT_HEIGHT_M * (1.0 - _min_jerk(progress))
-        return 0.0
+    def _lift_heights_m(self, times) -> np.ndarray:
+        """Lift target [m] at ``times`` [s]: a minimum-jerk rise in LIFT, held in HOLD, lowered in PLACE."""
+        phases, progress = self._phases(times)
+        rise = LIFT_HEIGHT_M * progress**3 * (10.0 - 15.0 * progress + 6.0 * progress**2)
+        height = np.zeros(len(phases))
+        for phase, value in ((GraspPhase.LIFT, rise), (GraspPhase.HOLD, np.full(len(phases), LIFT_HEIGHT_M)),
+                             (GraspPhase.PLACE, LIFT_HEIGHT_M - rise)):
+            chosen = np.array([p is phase for p in phases])
+            height[chosen] = value[chosen]
+        return height
 
     def _touches_table(self) -> bool:
+        if self.data.ncon == 0:
+            return False
         pairs = np.sort(self.data.contact.geom, axis=1)
         return bool(np.any((pairs[:, 0] == min(self.table_geom, self.object_geom))
                            & (pairs[:, 1] == max(self.table_geom, self.object_geom))))
-
-    def _object_rotation(self) -> float:
-        """Object rotation about the left finger's normal (+y) [rad]."""
-        rotation = self.data.xmat[self.object_body]
-        return math.atan2(rotation[2], rotation[0])
-
-    def _grasp_point_mm(self):
-        """Object motion relative to the gripper: position of the object's initial grasp point relative to the arm
-        [mm] (3,) and object rotation about the grasp axis [rad]."""
-        data = self.data
-        rotation = data.xmat[self.object_body].reshape(3, 3)
-        point = data.xpos[self.object_body] + rotation @ self._grasp_local_m
-        return (point - data.xpos[self.arm_body]) * MM_PER_M, self._object_rotation()
 
     def run(self) -> TrialResult:
         """Run the sequence; return the verdicts and a 100 Hz trace.
 
         Between two sensor frames the controller's inputs are held, so its commands for the frame are computed
-        first and the frame's physics steps then run in compiled code (``ContactBridge.run``).
+        first and the frame's physics steps then run in compiled code (``ContactBridge.run``), each physics step
+        with the commands of the control steps it spans (or the one it lies in).
         """
         mujoco, model, data, s = self.mujoco, self.model, self.data, self.settings
-        rate = s.physics_rate_hz
-        per_grasp = rate_ratio(rate, self.grasp.parameters.sample_rate_hz)
-        per_sensor = rate_ratio(rate, self.sensing.array.sample_rate_hz)
+        physics_rate, control_rate = s.physics_rate_hz, self.grasp.parameters.sample_rate_hz
+        sensor_rate = self.sensing.array.sample_rate_hz
+        per_frame = int(round(physics_rate / sensor_rate))                  # physics steps per sensor frame
+        controls = int(round(control_rate / sensor_rate))                   # control steps per sensor frame
         rotation0 = data.xmat[self.object_body].reshape(3, 3)
         self._grasp_local_m = rotation0.T @ (np.array([0.0, 0.0, data.xpos[self.arm_body][2]])
                                              - data.xpos[self.object_body])
-        steps = int(round(self.schedule[-1][0] * rate))
-        phases, lift = self._plan(steps, rate)
-        rows, hold = [], []
-        command, dropped, turned = 0.0, False, 0.0
+        frames = int(round(self.schedule[-1][0] * sensor_rate))
+        phases = self._phases(np.arange(frames * controls) / control_rate)[0]
+        lift = self._lift_heights_m(np.arange(frames * per_frame) / physics_rate)
+        command, dropped = 0.0, False
         constant = s.constant_force
         bridge, grasp, sensing = self.bridge, self.grasp, self.sensing
-        commands = np.zeros(per_sensor)
+        commands = np.zeros(controls)
+        repeat = per_frame // controls if per_frame >= controls else 0
+        records = np.zeros((frames, K.R_SIZE))
+        signals = np.zeros((frames, 4))                                     # command, u_x, theta, mu_hat
+        hold_phase = np.array([phases[i * controls] is GraspPhase.HOLD for i in range(frames)])
         start = time.perf_counter()
-        for first in range(0, steps, per_sensor):
-            last = min(first + per_sensor, steps)
+        for frame_index in range(frames):
             frame = sensing.sense(bridge)
-            u_x, theta, count = frame.shear_displacement, frame.twist_angle, frame.contact_count
-            for step in range(first, last):
-                if step % per_grasp == 0:
-                    phase = phases[step]
-                    command = grasp.step(u_x, theta, count, phase)
-                    if constant is not None and phase is not GraspPhase.APPROACH:
-                        command = constant if phase is not GraspPhase.RELEASE else 0.0
-                commands[step - first] = command
-            bridge.run(model, data, commands[:last - first], lift[first:last])
-            phase = phases[first]
-            time_s = first / rate
-            relative_mm, rotation = self._grasp_point_mm()
-            height_m = float(data.xpos[self.object_body][2] - 0.5 * self.obj.size[2])
-            rows.append((time_s, phase.value, command, bridge.grip_force_n, u_x, theta, height_m, *relative_mm,
-                         rotation, int(bridge.sliding.sum())))
-            if phase is GraspPhase.LIFT or phase is GraspPhase.HOLD:
-                turned = max(turned, abs(rotation))
-            if phase is GraspPhase.HOLD:
-                dropped |= self._touches_table() or height_m < TABLE_CLEARANCE_M
-                hold.append((time_s, bridge.grip_force_n, *relative_mm, rotation))
+            grasp.observe(frame)
+            first = frame_index * controls
+            for step in range(controls):
+                phase = phases[first + step]
+                command = grasp.step(phase)
+                if constant is not None and phase is not GraspPhase.APPROACH:
+                    command = constant if phase is not GraspPhase.RELEASE else 0.0
+                commands[step] = command
+            held = np.repeat(commands, repeat)[:, None] if repeat else commands.reshape(per_frame, -1)
+            bridge.run(model, data, held, lift[frame_index * per_frame:(frame_index + 1) * per_frame],
+                       self._grasp_local_m, records[frame_index])
+            signals[frame_index] = (command, frame.shear_displacement, frame.twist_angle, grasp.friction_estimate)
+            if hold_phase[frame_index] and not dropped:
+                dropped = (data.ncon > 0 and self._touches_table()) or \
+                    records[frame_index, K.R_HEIGHT] < TABLE_CLEARANCE_M
         wall = time.perf_counter() - start
         unstable = data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number
         if unstable:
             raise RuntimeError(f"MuJoCo reset the simulation {unstable} times (bad accelerations) in trial "
-                               f"{self.obj.name!r} at physics_rate_hz={rate}: the step is too large for this world")
-        return self._result(rows, hold, dropped, bridge.peak_force_n, turned, wall, steps / rate)
+                               f"{self.obj.name!r} at physics_rate_hz={physics_rate}: the step is too large for this world")
+        times = np.arange(frames) / sensor_rate
+        frame_phases = [phases[i * controls] for i in range(frames)]
+        return self._result(times, frame_phases, records, signals, dropped, bridge.peak_force_n, wall,
+                            frames / sensor_rate)
 
-    def _plan(self, steps: int, rate: float):
-        """Phase (list of GraspPhase) and lift target [m] (array) at every physics step."""
-        phases, lift = [], np.zeros(steps)
-        for step in range(steps):
-            phase, progress = self._phase_at(step / rate)
-            phases.append(phase)
-            lift[step] = self._lift_height_m(phase, progress)
-        return phases, lift
-
-    def _result(self, rows, hold, dropped, force_peak, turned, wall, simulated) -> TrialResult:
-        names = ("time", "phase", "force_command", "grip_force", "shear_displacement", "twist_angle",
-                 "object_height_m", "slip_x_mm", "slip_y_mm", "slip_z_mm", "rotation", "sliding_bumps")
-        trace = {name: [row[i] for row in rows] for i, name in enumerate(names)}
+    def _result(self, times, phases, records, signals, dropped, force_peak, wall, simulated) -> TrialResult:
+        trace = {"time": times.tolist(), "phase": [phase.value for phase in phases],
+                 "force_command": signals[:, 0].tolist(), "grip_force": records[:, K.R_GRIP_FORCE].tolist(),
+                 "shear_displacement": signals[:, 1].tolist(), "twist_angle": signals[:, 2].tolist(),
+                 "object_height_m": records[:, K.R_HEIGHT].tolist(),
+                 "slip_x_mm": records[:, K.R_RELATIVE_X].tolist(), "slip_y_mm": records[:, K.R_RELATIVE_Y].tolist(),
+                 "slip_z_mm": records[:, K.R_RELATIVE_Z].tolist(), "rotation": records[:, K.R_ROTATION].tolist(),
+                 "sliding_bumps": records[:, K.R_SLIDING].astype(int).tolist(),
+                 "friction_estimate": signals[:, 3].tolist()}
         result = TrialResult(self.obj.name, self.settings, trace, wall_time=wall, simulated_time=simulated)
         result.dropped = bool(dropped)
         result.max_force = float(force_peak)
-        result.max_rotation_mrad = 1e3 * float(turned)
+        lifted = np.array([phase in (GraspPhase.LIFT, GraspPhase.HOLD) for phase in phases])
+        result.max_rotation_mrad = 1e3 * float(np.abs(records[lifted, K.R_ROTATION]).max(initial=0.0))
         result.crushed = force_peak > self.obj.crush_force
         result.minimum_force = float(self.grasp.minimum_force) if self.grasp.minimum_force is not None else math.nan
-        if hold:
-            hold = np.array(hold)                                                      # (n, 6)
+        if isinstance(self.grasp, _IncipientSlip):
+            result.friction_estimate = float(self.grasp.controller.friction_estimate)
+            result.slip_events = list(self.grasp.controller.slip_events)
+        holding = np.array([phase is GraspPhase.HOLD for phase in phases])
+        if holding.any():
+            hold = np.column_stack([times, records[:, K.R_GRIP_FORCE], records[:, K.R_RELATIVE_X:K.R_RELATIVE_Z + 1],
+                                    records[:, K.R_ROTATION]])[holding]                 # (n, 6)
             result.hold_force_mean = float(hold[:, 1].mean())
             result.hold_force_max = float(hold[:, 1].max())
+            result.hold_force_settled = float(hold[hold[:, 0] >= hold[-1, 0] - SETTLED_WINDOW, 1].mean())
             settled = hold[hold[:, 0] >= hold[0, 0] + 0.5]                             # after the lift transient
             if len(settled) > 2:                                                       # least-squares drift rates
                 rates = np.polyfit(settled[:, 0] - settled[0, 0], settled[:, 2:6], 1)[0]
@@ -239,9 +237,74 @@ class GraspWorld:
                 result.rotation_creep_mrad_per_s = float(1e3 * abs(rates[3]))
             result.hold_slip_mm = float(np.linalg.norm(hold[-1, 2:5] - hold[0, 2:5]))
             result.hold_rotation_mrad = float(1e3 * abs(hold[-1, 5] - hold[0, 5]))
-        result.success = not result.dropped and not result.crushed and bool(hold is not None and len(hold))
+        result.success = not result.dropped and not result.crushed and bool(holding.any())
         return result
 
+
+SETTLED_WINDOW = 1.0          # s: the end of the hold over which the settled grip force is averaged
+
+
+class _DisplacementLaw:
+    """The displacement-target law behind the same two calls as the incipient-slip controller."""
+
+    friction_estimate = math.nan                       # the law assumes its design friction; it measures none
+
+    def __init__(self, controller: GraspForceController):
+        self.controller, self.parameters = controller, controller.parameters
+        self._inputs = (0.0, 0.0, 0)
+
+    @property
+    def minimum_force(self):
+        return self.controller.minimum_force
+
+    def observe(self, frame) -> None:
+        self._inputs = (frame.shear_displacement, frame.twist_angle, frame.contact_count)
+
+    def step(self, phase) -> float:
+        return self.controller.step(*self._inputs, phase)
+
+
+class _IncipientSlip:
+    """The incipient-slip controller fed from sensor frames."""
+
+    def __init__(self, controller: IncipientSlipController):
+        self.controller, self.parameters = controller, controller.parameters
+
+    @property
+    def minimum_force(self):
+        return self.controller.minimum_force
+
+    @property
+    def friction_estimate(self) -> float:
+        return self.controller.friction_estimate
+
+    def observe(self, frame) -> None:
+        self.controller.observe(frame.normal_force, frame.load_ratio, frame.loaded, frame.ratio_noise)
+
+    def step(self, phase) -> float:
+        return self.controller.step(phase)
+
+
+def _controller(settings: TrialSettings, parameters, sensing: SensingChain, tip: ReducedFingertip):
+    """The trial's controller, fed only what the sensor reports (``observe``) and the phase (``step``)."""
+    limit = TORQUE_LIMIT / ARM_RADIUS
+    if settings.controller is ControllerKind.DISPLACEMENT_TARGETS:
+        base = GraspForceParameters(approach_force=0.5, maximum_force=limit, loop_rate=LOOP_RATE) \
+            if parameters is None else parameters
+        if not isinstance(base, GraspForceParameters):
+            raise ValueError(f"controller_parameters must be GraspForceParameters for {settings.controller.value}, "
+                             f"got {type(base).__name__}")
+        law = GraspForceController(replace(base, rotational_slip_detection=settings.rotational_slip_detection),
+                                   sensing.design_references())
+        return _DisplacementLaw(law)
+    base = IncipientSlipParameters(maximum_force=limit) if parameters is None else parameters
+    if not isinstance(base, IncipientSlipParameters):
+        raise ValueError(f"controller_parameters must be IncipientSlipParameters for {settings.controller.value}, "
+                         f"got {type(base).__name__}")
+    frame_rate = sensing.array.sample_rate_hz
+    return _IncipientSlip(IncipientSlipController(
+        replace(base, rotational_slip_detection=settings.rotational_slip_detection, frame_rate_hz=frame_rate),
+        tip.centres))
 
 
 def run_trial(obj: GraspObject, settings: TrialSettings | None = None, **options) -> TrialResult:

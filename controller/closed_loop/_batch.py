@@ -1,0 +1,90 @@
+"""Many closed-loop trials at once: a process pool, results as they finish, progress on a bar.
+
+Each trial is independent (its own MuJoCo world and random stream), so trials fan out over processes; a worker
+warms its caches once (the compiled kernels, the calibrated fingertip, the sensing bench) and then runs job after
+job. Results come back in completion order with the index of their job.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterable, Iterator
+from concurrent.futures import ProcessPoolExecutor, as_completed
+
+from ._trial import GraspObject, TrialResult, TrialSettings
+
+__all__ = ["run_trials", "map_trials", "default_processes"]
+
+
+def default_processes() -> int:
+    """Worker processes for a batch: ``FINGERTIP_PROCESSES`` if set (``studies all`` shares the CPUs out that way),
+    else the CPUs this process may use (``os.sched_getaffinity``); at least 1."""
+    setting = os.environ.get("FINGERTIP_PROCESSES")
+    if setting:
+        try:
+            return max(int(setting), 1)
+        except ValueError:
+            raise ValueError(f"FINGERTIP_PROCESSES={setting!r} must be an integer >= 1") from None
+    try:
+        return max(len(os.sched_getaffinity(0)), 1)
+    except AttributeError:                                                  # not on Linux
+        return max(os.cpu_count() or 1, 1)
+
+
+def _warm() -> None:
+    """Compile the kernels and build the default fingertip's bench once per worker."""
+    from ._trial import TABLE_I_OBJECTS
+    from ._world import GraspWorld
+
+    GraspWorld(TABLE_I_OBJECTS["eclair"], TrialSettings(hold_time=0.0, place=False))
+
+
+def _call(index: int, function: Callable, arguments: tuple) -> tuple[int, object]:
+    return index, function(*arguments)
+
+
+def map_trials(function: Callable, jobs: Iterable[tuple], processes: int | None = None,
+               progress: str | None = None) -> Iterator[tuple[int, object]]:
+    """``function(*job)`` for every job over a process pool; yield (job index, value) as each finishes.
+
+    ``function`` must be importable by name (a module-level function). ``processes``: default
+    ``default_processes()``; 1 runs the jobs here, in order. ``progress``: a label for a progress bar on stderr
+    (None: no bar).
+    """
+    from tqdm import tqdm
+
+    jobs = list(jobs)
+    if not jobs:
+        return
+    processes = default_processes() if processes is None else processes
+    if isinstance(processes, bool) or not isinstance(processes, int) or processes < 1:
+        raise ValueError(f"processes={processes!r} must be an integer >= 1")
+    bar = tqdm(total=len(jobs), desc=progress, unit="job", disable=progress is None, leave=False)
+    try:
+        if processes == 1 or len(jobs) == 1:
+            for index, job in enumerate(jobs):
+                yield _call(index, function, job)
+                bar.update()
+            return
+        with ProcessPoolExecutor(max_workers=min(processes, len(jobs)), initializer=_warm) as pool:
+            futures = [pool.submit(_call, index, function, job) for index, job in enumerate(jobs)]
+            for future in as_completed(futures):
+                yield future.result()
+                bar.update()
+    finally:
+        bar.close()
+
+
+def _trial(obj: GraspObject, settings: TrialSettings, options: dict) -> TrialResult:
+    from ._world import run_trial
+
+    return run_trial(obj, settings, **options)
+
+
+def run_trials(jobs: Iterable[tuple[GraspObject, TrialSettings]], processes: int | None = None,
+               progress: str | None = None, **options) -> Iterator[tuple[int, TrialResult]]:
+    """Run (object, settings) trials; yield (job index, TrialResult) as each finishes (``map_trials``).
+
+    ``options`` go to ``run_trial`` (tip, controller parameters).
+    """
+    yield from map_trials(_trial, [(obj, settings, options) for obj, settings in jobs], processes, progress)
