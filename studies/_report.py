@@ -183,43 +183,62 @@ def _rule_fig9(summary, rows):
         f"{'within' if alike else 'beyond'} {100 * FIG9_ERROR_SLACK:.0f} points of the paper's")
 
 
+PAPER_TRIALS = 10             # trials per object in the paper's Table I (and the fewest a 10/10 claim needs)
+
+
 def _rule_fig10(summary, rows):
-    """Bottle and eclair held with rotational detection; the eclair lost, crushed or turned out without it."""
-    from controller.closed_loop import ROTATION_LIMIT
-
-    success, turned = summary.get("success") or {}, summary.get("max_rotation_mrad") or {}
-    cases = ("bottle", "eclair_with_rotation", "eclair_without_rotation")
-    if not set(cases) <= set(success) or not set(cases) <= set(turned):
+    """Moment-loaded objects held with rotational detection; under-gripped (turned out or dropped) without it."""
+    counts = summary.get("counts") or {}
+    keys = [key for key in counts if key.endswith(" with rotation")]
+    if not keys:
         return _study_verdict(summary, rows)
-    held = {case: success[case] and turned[case] <= 1e3 * ROTATION_LIMIT for case in cases}
-    wanted = {"bottle": True, "eclair_with_rotation": True, "eclair_without_rotation": False}
-    matched = [held[case] == outcome for case, outcome in wanted.items()]
-    return _grade(matched), "; ".join(
-        f"{case}: {'held' if held[case] else 'lost, crushed or turned'} ({turned[case]:.0f} mrad; paper: "
-        f"{'held' if outcome else 'force not enough'})" for case, outcome in wanted.items())
+    held = all(counts[key]["held"] == counts[key]["trials"] for key in keys)
+    eclair = counts.get("eclair without rotation", {})
+    under = eclair.get("turned out", 0) + eclair.get("dropped", 0)
+    trials = min(counts[key]["trials"] for key in counts)
+    bottle = (summary.get("series") or {}).get("bottle", {}).get("outcome") == "held"
+    matched = [held, bottle, 2 * under >= eclair.get("trials", 0) > 0]
+    verdict = _grade(matched)
+    if verdict == REPRODUCED and trials < PAPER_TRIALS:
+        verdict = PARTLY
+    return verdict, "; ".join(
+        f"{key}: " + ", ".join(f"{counts[key][label]} {label}" for label in ("held", "turned out", "dropped",
+                                                                             "crushed")) + f" of {counts[key]['trials']}"
+        for key in counts) + (f"; reproduced if every trial with rotational detection is held and at least half of the "
+                              f"eclair's without it are under-gripped, from {PAPER_TRIALS} or more trials each")
 
 
-FIG11_CLOSE = 0.5             # |tau / tau_min - 1| counted as 'close to the minimum' (a judgement, not a tolerance)
+FIG11_MEAN, FIG11_MAX = 1.3, 1.5   # 'close to tau_min': the human precision grip's 10-40 % margin (docs/design.md)
+FIG11_CASES = 9
 
 
 def _rule_fig11(summary, rows):
-    error = summary.get("max_error")
-    failed = (summary.get("designs") or {}).get("this surface", {}).get("failed_trials", 0)
-    verdict = (REPRODUCED if error is not None and error <= FIG11_CLOSE and not failed else
-               PARTLY if error is not None and error <= 2 * FIG11_CLOSE else NOT_REPRODUCED)
-    return verdict, (f"largest |tau / tau_min - 1| = {_number(error)} over the held cases, mean tau / tau_min = "
-                     f"{_number(summary.get('ratio_mean'))}, {failed} failed trials with the surface targets; "
-                     f"'close' taken as within {FIG11_CLOSE:.0%} with no failure, 'partly' within "
-                     f"{2 * FIG11_CLOSE:.0%}")
+    mean, largest = summary.get("ratio_mean"), summary.get("ratio_max")
+    trials, held = summary.get("trials", 0), summary.get("held", 0)
+    cases = len({row.get("case") for row in rows}) if rows else 0
+    close = mean is not None and largest is not None and mean <= FIG11_MEAN and largest <= FIG11_MAX
+    verdict = REPRODUCED if close and held == trials else PARTLY if held == trials or close else NOT_REPRODUCED
+    if verdict == REPRODUCED and cases < FIG11_CASES:
+        verdict = PARTLY
+    return verdict, (f"tau / tau_min mean {_number(mean)}, largest {_number(largest)} over {held} of {trials} trials "
+                     f"held ({summary.get('dropped', 0)} dropped, {summary.get('rotated', 0)} turned out) in {cases} "
+                     f"cases; reproduced if every trial holds, the mean is <= {FIG11_MEAN} and the largest <= "
+                     f"{FIG11_MAX}, over >= {FIG11_CASES} cases")
 
 
 def _rule_table1(summary, rows):
     objects = summary.get("objects") or {}
     worst = summary.get("max_error")
+    trials = min((entry.get("trials", 0) for entry in objects.values()), default=0)
     verdict = (REPRODUCED if worst == 0 else PARTLY if worst is not None and worst <= 0.2 else NOT_REPRODUCED)
-    return verdict, ", ".join(f"{name}: {entry.get('success')}" for name, entry in objects.items()) + (
-        f" (paper: 10/10 each); worst failure rate {_number(worst)}; reproduced only if every trial succeeds, "
-        f"partly up to 2 failures in 10")
+    if verdict == REPRODUCED and trials < PAPER_TRIALS:
+        verdict = PARTLY
+    text = ", ".join(f"{name}: {entry.get('success')} (95 % interval {100 * entry['success_interval'][0]:.0f}-"
+                     f"{100 * entry['success_interval'][1]:.0f} %; {entry.get('dropped')} dropped, "
+                     f"{entry.get('crushed')} crushed)" if entry.get("success_interval") else
+                     f"{name}: {entry.get('success')}" for name, entry in objects.items())
+    return verdict, text + (f" (paper: 10/10 each); reproduced only if every trial succeeds, from {PAPER_TRIALS} or "
+                            f"more trials per object; partly up to a 20 % failure rate or from fewer trials")
 
 
 def _rule_convergence(summary, rows):
@@ -281,25 +300,24 @@ CLAIMS: dict[str, Claim] = {
         "paper Fig. 10 (sec. VI-C)",
         "the grasp force rises and falls at the moments of lifting and placing, following u_x and u_theta; without "
         "rotational slip detection the grasp force is not enough (eclair)",
-        "MuJoCo closed loop with the reduced contact model: bottle held, eclair held with rotational slip detection "
-        "(turned less than 8.6 deg) and lost, crushed or turned out of the grasp without it (targets at 0.8 of the "
-        "slip limit)", _rule_fig10,
-        "With Table I's lowest-mu targets (0.6) the translational channel alone also holds the eclair: its estimate "
-        "grows with the array's partial rotational slip (fig10_summary.csv)."),
+        "MuJoCo closed loop with the reduced contact model and the incipient-slip controller: the bottle over time; "
+        "randomised trials of the eclair and the horizontal bottle with and without rotational slip detection, "
+        "outcomes counted apart (held, turned out, dropped, crushed)", _rule_fig10,
+        "Without rotational detection the controller sees only the translational part of the bumps' load ratios."),
     "fig11": Claim(
         "paper Fig. 11 (sec. VI-C)",
         "the grasp force stays close to the minimum grasp force tau_min for different weights and moments",
-        "MuJoCo closed loop: controller hold force tau against tau_min from constant-force trials, per mass and "
-        f"moment, targets for the object's surface; reproduced if every |tau / tau_min - 1| <= {FIG11_CLOSE}",
+        "MuJoCo closed loop: the grip the incipient-slip controller settles at against each trial's own tau_min from "
+        "constant-force trials (bisection to 2 %), randomised friction, jitter and noise, per mass and moment",
         _rule_fig11,
-        "Targets for the lowest friction of Table I (mu = 0.4) hold about mu / (0.4 x 0.6) = 2.5 tau_min at mu = 0.6: "
-        "below gross slip the displacement hardly depends on mu, so an unknown surface costs a safety factor."),
+        "The controller learns the friction in hand by probing the grip down until the first bump slides."),
     "table1": Claim(
         "paper Table I (sec. VI-C)",
         "10/10 grasp success for the bottle placed vertically (600 g, 0 mNm), horizontally (251 g, 120 mNm) and "
         "the eclair (104 g, 39 mNm)",
-        "MuJoCo closed loop: success rate per object (10 trials default, 1 quick), randomised mu, grasp position and "
-        "sensor noise", _rule_table1),
+        "MuJoCo closed loop, incipient-slip controller: success rate per object with its 95 % Wilson interval (30 "
+        "trials default, 3 quick), drops and crushes apart, randomised mu, grasp position and sensor noise",
+        _rule_table1),
     "convergence": Claim(
         "docs/design.md, sec. 8 (HCM-1 benchmark)",
         "the FEM stick ratio on HCM-1 follows Cattaneo-Mindlin to within 0.02 on a fine mesh",

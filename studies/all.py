@@ -34,8 +34,8 @@ SOURCE_PACKAGES = ("fem", "contact", "controller")
 OUTPUT_EXTENSIONS = ("png", "pdf", "csv")
 STAMP_DIR, LOG_DIR = ".stamps", "logs"
 # default wall times [s] measured on the shared 2-core machine (quick: about a tenth), to start the longest first
-EXPECTED_SECONDS = {"convergence": 400, "fig6": 500, "fig3": 120, "fig4": 120, "fig9": 140, "fig10": 60, "fig11": 850,
-                    "table1": 550}
+EXPECTED_SECONDS = {"convergence": 400, "fig6": 500, "fig3": 120, "fig4": 120, "fig9": 140, "fig10": 40, "fig11": 90,
+                    "table1": 60}
 
 
 def add_arguments(parser) -> None:
@@ -137,7 +137,8 @@ def selected_names(modules: dict, import_errors: dict, only=None) -> list[str]:
 def source_files(module) -> list[Path]:
     """What a study's results depend on: its module and every module of ``studies._*`` and SOURCE_PACKAGES that it
     imports, directly or through others (static imports, also inside functions; with the packages' ``__init__``),
-    the scene files and the JSON data next to those modules. A change elsewhere (another study, a module it never imports) keeps it up to date."""
+    the scene files and the JSON data next to those modules. A change elsewhere (another study, a module it never
+    imports) keeps it up to date."""
     files, seen = set(), set()
     pending = [module.__name__]
     while pending:
@@ -238,11 +239,22 @@ def run_study(name: str, module_name: str, out_dir: str, quick: bool, digest: st
     return record
 
 
+def _progress(tasks):
+    """A bar over the studies on stderr, weighted by their expected seconds (the longest start first)."""
+    from tqdm import tqdm
+
+    return tqdm(total=len(tasks), desc=NAME, unit="study", leave=True,
+                bar_format="{desc}: {n}/{total} studies |{bar}| {elapsed} elapsed{postfix}")
+
+
 def _run_here(tasks) -> dict:
     records = {}
-    for task in tasks:
-        print(f"{NAME}: {task[0]} started")
-        records[task[0]] = _announce(run_study(*task))
+    with _progress(tasks) as bar:
+        for task in tasks:
+            bar.set_postfix_str(f"running {task[0]}")
+            print(f"{NAME}: {task[0]} started")
+            records[task[0]] = _announce(run_study(*task))
+            bar.update()
     return records
 
 
@@ -253,7 +265,7 @@ def _run_parallel(tasks, jobs: int) -> dict:
     threads = max(1, (os.cpu_count() or 1) // jobs)
     records = {}
     with ProcessPoolExecutor(max_workers=min(jobs, len(tasks)), mp_context=multiprocessing.get_context("spawn"),
-                             initializer=_limit_threads, initargs=(threads,)) as pool:
+                             initializer=_limit_threads, initargs=(threads,)) as pool, _progress(tasks) as bar:
         futures = {pool.submit(run_study, *task): task[0] for task in tasks}
         print(f"{NAME}: running {', '.join(futures.values())} on {min(jobs, len(tasks))} workers")
         for future in as_completed(futures):
@@ -263,11 +275,14 @@ def _run_parallel(tasks, jobs: int) -> dict:
             except BrokenProcessPool as error:   # a worker died (killed, out of memory): its record was not written
                 records[name] = dict(name=name, status="failed", wall_time=None,
                                      error=f"worker process ended abruptly ({error}); run again to retry")
+            bar.set_postfix_str(f"{name} done")
+            bar.update()
     return records
 
 
 def _limit_threads(threads: int) -> None:
-    for variable in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
+    """Share the CPUs out: BLAS threads, and the closed-loop studies' trial workers (``default_processes``)."""
+    for variable in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "FINGERTIP_PROCESSES"):
         os.environ.setdefault(variable, str(threads))
 
 

@@ -1,88 +1,132 @@
-"""Fig. 10 (closed loop, MuJoCo): grasp force, u_x and u_theta over the sequence; eclair with and without rotation.
+"""Fig. 10 (closed loop, MuJoCo): the grasp over time; moment-loaded objects with and without rotational detection.
 
-(a) The horizontal plastic bottle (251 g, 120 mN m) at mu = 0.6 with the Table I controller: the grasp force follows
-the estimated translational and rotational shear displacement through grasp, lift, hold, place and release.
-(b) The eclair (104 g, 39 mN m) at mu = 0.4 with and without rotational slip detection, for two target designs
-(controller.closed_loop.TargetDesign): "this surface" (targets at 0.8 of the slip limit for mu = 0.4, the tuned
-controller of the paper's experiments) and "lowest mu" (Table I's safety factor, 0.6). Without rotational
-detection the force settles where the translational channel wants it, below what the moment needs (paper: "the grasp
-force is not enough"): the eclair turns in the grasp until its rotation drives the translational estimate up. With
-the 0.6 targets that estimate, inflated by the array's partial rotational slip (the bumps on one side slide first and
-the array's translational compliance grows), catches the eclair before it turns; the outcome is reported either way.
-Outputs: fig10.csv (time series at 10 Hz as the paper records, tidy: case, time, ...), fig10_summary.csv (one row per
-trial), fig10.png/pdf.
+(a) The horizontal plastic bottle (251 g, 120 mN m) at mu = 0.6: grasp force, the paper's u_x and u_theta (eq. 9
+on the sensor), and the friction the incipient-slip controller measures in hand, through grasp, lift, hold (where
+it probes the force down until the first bump slides, then steps it up), place and release.
+(b) The paper's claim: without rotational slip detection the grasp force is not enough. The eclair (104 g,
+39 mN m) and the horizontal bottle, each in randomised trials (friction 0.4-1.0, grasp jitter, misalignment,
+sensor noise), with and without rotational detection (without it the controller sees only the translational part
+of the bumps' load ratios). Outcomes are counted apart: held, turned out of the grasp (> 0.15 rad), dropped (touched
+the table in the hold: under-grip) and crushed (over-grip; the eclair's crush force is 10 N).
+Outputs: fig10.csv (time series of (a) and of the eclair pair at mu = 0.4, 10 Hz as the paper records),
+fig10_trials.csv (one row per trial of (b), resumable), fig10.png/pdf.
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
 from studies._output import save_figure, write_csv_atomic
+from studies._trials import run_trial_table, trial_key
 
 NAME = "fig10"
-FRICTION = 0.6                  # bottle (a)
-ECLAIR_FRICTION = 0.4           # eclair (b): the lowest friction of Table I's range
+FRICTION = 0.6                  # (a) bottle
+ECLAIR_FRICTION = 0.4           # the time-series pair of (b): the lowest friction of Table I's range
 RECORD_EVERY = 10               # trace rows are 100 Hz; the paper records at 10 Hz
+TRIALS = 10
+OBJECTS = ("eclair", "bottle_horizontal")
 
 
-def _cases():
-    """{case: (object, rotational detection, friction, TargetDesign)}."""
-    from controller.closed_loop import TargetDesign
-
-    tuned, default = TargetDesign(ECLAIR_FRICTION, 0.8, 0.8), TargetDesign()
-    return {"bottle": ("bottle_horizontal", True, FRICTION, default),
-            "eclair_with_rotation": ("eclair", True, ECLAIR_FRICTION, tuned),
-            "eclair_without_rotation": ("eclair", False, ECLAIR_FRICTION, tuned),
-            "eclair_with_rotation_lowest_mu_targets": ("eclair", True, ECLAIR_FRICTION, default),
-            "eclair_without_rotation_lowest_mu_targets": ("eclair", False, ECLAIR_FRICTION, default)}
+def add_arguments(parser) -> None:
+    parser.add_argument("--trials", type=int, default=None, help=f"trials per object and setting (default {TRIALS}, "
+                                                                  "quick 2)")
+    parser.add_argument("--processes", type=int, default=None, help="worker processes (default: every CPU)")
 
 
-def run(out_dir, quick: bool = False) -> dict:
-    """Five trials (bottle; eclair with and without rotational detection, two target designs); CSV and figure."""
-    from controller.closed_loop import TABLE_I_OBJECTS, TrialSettings, required_grip_force, run_trial
+def outcome(result) -> str:
+    """'crushed', 'dropped', 'turned out' or 'held' (in that order of precedence)."""
+    if result.crushed:
+        return "crushed"
+    if result.dropped:
+        return "dropped"
+    return "turned out" if result.rotated else "held"
+
+
+def _row(result, info) -> dict:
+    return dict(object=info["object"], rotational_detection=info["rotation"], trial=info["trial"],
+                friction_coefficient=result.settings.friction_coefficient, outcome=outcome(result),
+                success=result.success, max_rotation_mrad=result.max_rotation_mrad,
+                hold_force_settled=result.hold_force_settled, max_force=result.max_force,
+                required_force=info["required"], friction_estimate=result.friction_estimate)
+
+
+def run(out_dir, quick: bool = False, trials: int | None = None, processes: int | None = None) -> dict:
+    """(a) one bottle trial; (b) randomised trials with and without rotational detection; CSVs and figure."""
+    from controller.closed_loop import TABLE_I_OBJECTS, TrialSettings, random_settings, required_grip_force, \
+        run_trials
 
     out_dir = Path(out_dir)
+    trials = (2 if quick else TRIALS) if trials is None else trials
+    if isinstance(trials, bool) or not isinstance(trials, int) or trials < 1:
+        raise ValueError(f"trials={trials!r} must be an integer >= 1")
     hold = 2.0 if quick else 4.0
-    results, rows, summary = {}, [], []
-    for case, (name, rotation, friction, targets) in _cases().items():
-        result = run_trial(TABLE_I_OBJECTS[name], TrialSettings(friction_coefficient=friction, rotational_slip_detection=rotation,
-                                                                hold_time=hold, seed=3, targets=targets))
-        results[case] = result
+    series_settings = {"bottle": ("bottle_horizontal", TrialSettings(friction_coefficient=FRICTION, hold_time=hold,
+                                                                     seed=3)),
+                       "eclair_with_rotation": ("eclair", TrialSettings(friction_coefficient=ECLAIR_FRICTION,
+                                                                        hold_time=hold, seed=3)),
+                       "eclair_without_rotation": ("eclair", TrialSettings(
+                           friction_coefficient=ECLAIR_FRICTION, hold_time=hold, seed=3,
+                           rotational_slip_detection=False))}
+    series = {}
+    for index, result in run_trials([(TABLE_I_OBJECTS[name], s) for name, s in series_settings.values()],
+                                    processes):
+        series[list(series_settings)[index]] = result
+    rows = []
+    for case, result in series.items():
         trace = result.trace
         for i in range(0, len(trace["time"]), RECORD_EVERY):
             rows.append(dict(case=case, time=trace["time"][i], phase=trace["phase"][i],
                              grasp_force=trace["grip_force"][i], force_command=trace["force_command"][i],
                              shear_displacement=trace["shear_displacement"][i], twist_angle=trace["twist_angle"][i],
-                             object_rotation=trace["rotation"][i], object_height_m=trace["object_height_m"][i]))
-        needed = required_grip_force(TABLE_I_OBJECTS[name], friction)
-        summary.append(dict(case=case, friction_coefficient=friction, design_load_ratio=targets.load_ratio,
-                            rotational_detection=rotation, success=result.success, dropped=result.dropped,
-                            crushed=result.crushed, rotated=result.rotated, max_rotation_mrad=result.max_rotation_mrad,
-                            hold_force_mean=result.hold_force_mean, max_force=result.max_force, needed_force=needed))
-        write_csv_atomic(out_dir / f"{NAME}.csv", rows)                  # after every trial: nothing is lost
-        write_csv_atomic(out_dir / f"{NAME}_summary.csv", summary)
-        print(f"{NAME}: {case}: success {result.success} (dropped {result.dropped}, crushed {result.crushed}), "
-              f"hold force {result.hold_force_mean:.2f} N, needed {needed:.2f} N, peak {result.max_force:.1f} N, "
-              f"largest rotation in lift/hold {result.max_rotation_mrad:.1f} mrad")
-    save_figure(_plot(results), out_dir, NAME)
-    with_rotation, without = results["eclair_with_rotation"], results["eclair_without_rotation"]
-    reproduced = (results["bottle"].success and with_rotation.success and not with_rotation.rotated
-                  and (without.rotated or not without.success))
-    return {"max_error": float(not reproduced),
-            "error_meaning": "1 unless the bottle and the eclair are held with rotational detection and the eclair "
-                             "turns out of the grasp (or is lost or crushed) without it",
-            "hold_force": {case: r.hold_force_mean for case, r in results.items()},
-            "max_rotation_mrad": {case: r.max_rotation_mrad for case, r in results.items()},
-            "success": {case: r.success for case, r in results.items()}}
+                             friction_estimate=trace["friction_estimate"][i], object_rotation=trace["rotation"][i],
+                             object_height_m=trace["object_height_m"][i]))
+    write_csv_atomic(out_dir / f"{NAME}.csv", rows)
+    rng = np.random.default_rng(10)
+    jobs = []
+    for name in OBJECTS:
+        obj = TABLE_I_OBJECTS[name]
+        for trial in range(trials):
+            base = random_settings(rng, hold_time=hold, place=False)
+            for rotation in (True, False):
+                settings = replace(base, rotational_slip_detection=rotation)
+                info = dict(object=name, rotation=rotation, trial=trial,
+                            required=required_grip_force(obj, settings.friction_coefficient))
+                jobs.append((trial_key(obj, settings), obj, settings, info))
+    trial_rows = run_trial_table(out_dir / f"{NAME}_trials.csv", jobs, _row, processes, label=NAME)
+    counts = _counts(trial_rows)
+    for (name, rotation), entry in counts.items():
+        print(f"{NAME}: {name} {'with' if rotation else 'without'} rotational detection: " +
+              ", ".join(f"{key} {value}" for key, value in entry.items()))
+    save_figure(_plot(series, counts), out_dir, NAME)
+    held_with = all(counts[name, True]["held"] == counts[name, True]["trials"] for name in OBJECTS)
+    under_without = {name: counts[name, False]["turned out"] + counts[name, False]["dropped"] for name in OBJECTS}
+    return {"max_error": float(not (held_with and series["bottle"].success)),
+            "error_meaning": "1 unless every moment-loaded trial with rotational detection is held and the bottle "
+                             "of (a) too",
+            "counts": {f"{name} {'with' if rotation else 'without'} rotation": entry
+                       for (name, rotation), entry in counts.items()},
+            "held_with_rotation": held_with, "under_gripped_without_rotation": under_without,
+            "series": {case: dict(outcome=outcome(r), hold_force_settled=r.hold_force_settled,
+                                  max_rotation_mrad=r.max_rotation_mrad) for case, r in series.items()}}
+
+
+def _counts(rows) -> dict:
+    counts = {}
+    for name in OBJECTS:
+        for rotation in (True, False):
+            mine = [r for r in rows if r["object"] == name and bool(r["rotational_detection"]) == rotation]
+            entry = {label: sum(r["outcome"] == label for r in mine)
+                     for label in ("held", "turned out", "dropped", "crushed")}
+            counts[name, rotation] = dict(trials=len(mine), **entry)
+    return counts
 
 
 def _shade(axis, trace):
-    phases = np.array(trace["phase"])
-    time = np.array(trace["time"])
-    colours = {"lift": "#fde0dd", "hold": "#e5f5e0", "place": "#deebf7"}
-    for phase, colour in colours.items():
+    phases, time = np.array(trace["phase"]), np.array(trace["time"])
+    for phase, colour in {"lift": "#fde0dd", "hold": "#e5f5e0", "place": "#deebf7"}.items():
         inside = time[phases == phase]
         if inside.size:
             axis.axvspan(inside[0], inside[-1], color=colour, zorder=0)
@@ -90,38 +134,50 @@ def _shade(axis, trace):
                       ha="center", va="bottom", fontsize=7)
 
 
-def _plot(results):
+def _plot(series, counts):
     import matplotlib.pyplot as plt
 
-    fig, axes = plt.subplots(5, 1, figsize=(8, 12), sharex=True)
-    bottle = results["bottle"].trace
-    for axis, key, label, scale in ((axes[0], "grip_force", "grasp force [N]", 1.0),
-                                    (axes[1], "shear_displacement", "u_x [mm]", 1.0),
-                                    (axes[2], "twist_angle", "u_theta [mrad]", 1e3)):
+    fig = plt.figure(figsize=(11, 12))
+    grid = fig.add_gridspec(5, 2, height_ratios=(1, 1, 1, 1, 1.2))
+    bottle = series["bottle"].trace
+    top = [fig.add_subplot(grid[row, :]) for row in range(3)]
+    for axis, key, label, scale in ((top[0], "grip_force", "grasp force [N]", 1.0),
+                                    (top[1], "shear_displacement", "u_x [mm]", 1.0),
+                                    (top[2], "twist_angle", "u_theta [mrad]", 1e3)):
         _shade(axis, bottle)
         axis.plot(bottle["time"], np.asarray(bottle[key]) * scale, color="#3182bd")
         axis.set_ylabel(label)
-    axes[0].set_title("(a) horizontal bottle, mu = %.1f" % FRICTION, fontsize=10)
-    for axis in axes[3:]:
-        _shade(axis, results["eclair_with_rotation"].trace)
-    styles = {"eclair_with_rotation": ("#3182bd", "-"), "eclair_without_rotation": ("#e6550d", "-"),
-              "eclair_with_rotation_lowest_mu_targets": ("#3182bd", ":"),
-              "eclair_without_rotation_lowest_mu_targets": ("#e6550d", ":")}
-    for case, (colour, line) in styles.items():
-        result, trace = results[case], results[case].trace
-        outcome = ("held" if result.success else "lost") + (", turned" if result.rotated else "") + \
-            (", crushed" if result.crushed else "")
-        label = ("with" if "with_rotation" in case else "without") + " rotational detection" + \
-            (", lowest-mu targets" if "lowest_mu" in case else "") + f" ({outcome})"
-        axes[3].plot(trace["time"], trace["grip_force"], color=colour, linestyle=line, label=label)
-        axes[4].plot(trace["time"], 1e3 * np.asarray(trace["rotation"]), color=colour, linestyle=line)
-    axes[3].set_ylabel("grasp force [N]")
-    axes[3].set_title(f"(b) eclair with and without rotational slip detection, mu = {ECLAIR_FRICTION}", fontsize=10)
-    axes[3].legend(fontsize=7)
-    axes[4].set_ylabel("eclair rotation [mrad]")
-    axes[4].set_xlabel("time [s]")
-    for axis in axes:
         axis.grid(alpha=0.3)
-    fig.suptitle("Fig. 10: closed-loop grasp (MuJoCo + reduced 3x3 fingertip)")
+    twin = top[0].twinx()
+    twin.plot(bottle["time"], bottle["friction_estimate"], color="#e6550d", linewidth=1)
+    twin.set_ylabel("friction estimate [-]", color="#e6550d")
+    top[0].set_title(f"(a) horizontal bottle, mu = {FRICTION}: grip, the paper's u_x and u_theta, and the friction "
+                     "the controller measures", fontsize=10)
+    pair = fig.add_subplot(grid[3, :])
+    _shade(pair, series["eclair_with_rotation"].trace)
+    for case, colour in (("eclair_with_rotation", "#3182bd"), ("eclair_without_rotation", "#e6550d")):
+        result = series[case]
+        label = ("with" if "with_rotation" in case else "without") + f" rotational detection ({outcome(result)})"
+        pair.plot(result.trace["time"], 1e3 * np.asarray(result.trace["rotation"]), color=colour, label=label)
+    pair.set_ylabel("eclair rotation [mrad]")
+    pair.set_xlabel("time [s]")
+    pair.set_title(f"(b) eclair at mu = {ECLAIR_FRICTION} with and without rotational slip detection", fontsize=10)
+    pair.legend(fontsize=8)
+    pair.grid(alpha=0.3)
+    bars = fig.add_subplot(grid[4, :])
+    labels = ("held", "turned out", "dropped", "crushed")
+    colours = ("#31a354", "#fd8d3c", "#de2d26", "#756bb1")
+    keys = list(counts)
+    bottom = np.zeros(len(keys))
+    for label, colour in zip(labels, colours):
+        values = np.array([counts[key][label] for key in keys])
+        bars.bar(range(len(keys)), values, bottom=bottom, color=colour, label=label)
+        bottom += values
+    bars.set_xticks(range(len(keys)), [f"{name.replace('_', ' ')}\n{'with' if rotation else 'without'} rotation"
+                                       for name, rotation in keys], fontsize=8)
+    bars.set_ylabel("trials")
+    bars.set_title("(b) randomised trials (friction 0.4-1.0, jitter, noise): outcomes", fontsize=10)
+    bars.legend(fontsize=8, ncol=4)
+    fig.suptitle("Fig. 10: closed-loop grasp (MuJoCo + reduced 3x3 fingertip, incipient-slip controller)")
     fig.tight_layout()
     return fig

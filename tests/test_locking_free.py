@@ -16,7 +16,7 @@ from skfem import Basis, ElementTetP1, ElementTetP2, ElementVector, FacetBasis, 
 from contact.scene import ContactSpec, GelSpec, Load, LoadKind, Material, MeshSettings, Scene
 from contact.solver import preparation_key, solve_scene
 from contact.theory import hertz, stick_ratio_translational
-from fem.elasticity import assemble_elastic_model, assemble_stiffness, lame_parameters
+from fem.elasticity import assemble_elastic_model, assemble_stiffness
 from fem.linear_solver import SaddlePointFactorization, available_backends
 
 E, NU_INCOMPRESSIBLE = 1.0, 0.4999          # MPa, -

@@ -1,0 +1,77 @@
+"""Resumable tables of closed-loop trials: one CSV row per trial, written as each finishes, skipped on a re-run.
+
+A trial is known by a key made of its object, its settings and the package version (``trial_key``): a re-run with
+the same jobs reads the rows already in ``NAME_trials.csv`` and runs only the missing ones; after an upgrade, or with
+other settings, every trial runs again. Rows are kept in job order.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import json
+from collections.abc import Callable
+from dataclasses import asdict
+from pathlib import Path
+
+from studies._output import write_csv_atomic
+
+
+def trial_key(obj, settings, extra: str = "") -> str:
+    """Stable key of a trial: object, settings, ``extra`` (e.g. the controller) and the package version."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        package = version("fingertip-contact")
+    except PackageNotFoundError:                                          # running from a plain checkout
+        package = "unknown"
+    text = json.dumps([asdict(obj), asdict(settings), extra, package], sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def _read(path: Path) -> dict[str, dict]:
+    if not path.is_file():
+        return {}
+    with path.open(newline="") as stream:
+        return {row["key"]: row for row in csv.DictReader(stream) if row.get("key")}
+
+
+def run_trial_table(path: Path, jobs: list[tuple[str, object, object, dict]], row: Callable[[object, dict], dict],
+                    processes: int | None = None, label: str | None = None,
+                    function: Callable | None = None) -> list[dict]:
+    """Run the jobs (key, object, settings, info) not yet in the CSV at ``path``; return every job's row.
+
+    Each job is ``function(object, settings)`` (default: one trial, ``run_trial``) in a process pool;
+    ``row(value, info)`` turns its value into the CSV row (the key is added). Rows read back from an earlier run
+    pass through ``coerce`` (numbers and booleans from the CSV's strings).
+    """
+    from controller.closed_loop import map_trials, run_trial
+
+    done = _read(path)
+    keys = [job[0] for job in jobs]
+    rows = {key: coerce(done[key]) for key in keys if key in done}
+    missing = [job for job in jobs if job[0] not in rows]
+    if missing:
+        results = map_trials(function or run_trial, [(obj, settings) for _, obj, settings, _ in missing], processes,
+                             progress=label)
+        for index, result in results:
+            key, _, _, info = missing[index]
+            rows[key] = {"key": key, **row(result, info)}
+            write_csv_atomic(path, [rows[k] for k in keys if k in rows])     # after every trial: nothing is lost
+    return [rows[key] for key in keys]
+
+
+def coerce(row: dict) -> dict:
+    """Numbers and booleans back from a CSV row's strings (values computed in this run pass unchanged)."""
+    out = {}
+    for name, value in row.items():
+        if not isinstance(value, str) or name == "key":
+            out[name] = value
+        elif value in ("True", "False"):
+            out[name] = value == "True"
+        else:
+            try:
+                out[name] = float(value) if value.strip().lower() not in ("", "none") else None
+            except ValueError:
+                out[name] = value
+    return out
