@@ -9,11 +9,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from controller import AccelerationControlParameters, AccelerationController
-from controller.closed_loop import (ROTATION_LIMIT, TABLE_I_OBJECTS, ControllerKind, GraspObject, TargetDesign,
-                                    TrialSettings, default_tip)
+from controller import AccelerationController, AccelerationControlParameters
+from controller.closed_loop import (
+    ROTATION_LIMIT,
+    TABLE_I_OBJECTS,
+    ControllerKind,
+    GraspObject,
+    SensingChain,
+    TargetDesign,
+    TrialSettings,
+    default_tip,
+)
 from controller.closed_loop import _kernel as K
-from controller.closed_loop._sensing import SensingChain
 from controller.estimator import BumpReference, bump_positions, estimate_slip
 from controller.filters import FirstOrderLowPass
 from controller.sensor import PressureField, sample

@@ -1,8 +1,9 @@
 """Closed-loop grasp in MuJoCo: a parallel-jaw gripper with two 3x3-array gel fingertips on a lifting arm.
 
-Loop (paper Fig. 7): reduced contact model -> base pressure -> sensor (100 Hz, noise) -> estimator (eq. 9 on a 3x3
-BumpLayout) -> grasp-force controller (1 kHz) -> Acceleration Control with DOB (8 kHz) -> finger motor force. The
-controller gets no object data (mass, moment, friction). Sequence: approach, grasp on the table, lift, hold (4 s),
+Loop (paper Fig. 7): reduced contact model -> base pressure -> sensor (100 Hz, noise) -> estimator (per-bump forces
+and load ratios, and eq. 9's shear displacement on a 3x3 BumpLayout) -> grasp-force controller (1 kHz; by default
+the incipient-slip law of ``controller.incipient_slip``, ``ControllerKind``) -> Acceleration Control with DOB (8 kHz)
+-> finger motor force. The controller gets no object data (mass, moment, friction) and no simulator slip state. Sequence: approach, grasp on the table, lift, hold (4 s),
 place, release. From Python::
 
     from controller.closed_loop import TABLE_I_OBJECTS, TrialSettings, run_trial
@@ -23,10 +24,10 @@ reversed, to the arm) through ``xfrc_applied`` by a compiled step (``_kernel``):
   object does not creep), partial slip is Mindlin's inside each bump, incipient slip of the array is some bumps
   sliding, gross slip (translation or rotation) all of them.
 
-Rates. MuJoCo steps the arm, the object and its table contact at 1 kHz; within each step the kernel sub-steps the
-fingers and the Acceleration Control at 8 kHz against the object's pose, and couples the contact to the object
-implicitly (backward Euler on the contact terms, so the light eclair between two stiff fingertips needs no 4 kHz
-step); a sensor frame's ten physics steps run in compiled code, MuJoCo's own ``mj_step`` called from it. Outcomes
+Rates. MuJoCo steps the arm, the object and its table contact at ``PHYSICS_RATE_HZ`` (500 Hz); within each step
+the kernel sub-steps the fingers and the Acceleration Control at 8 kHz against the object's pose, and couples the
+contact to the object implicitly (backward Euler on the contact terms, so the light eclair between two stiff fingertips needs no 4 kHz
+step); a sensor frame's physics steps run in compiled code, MuJoCo's own ``mj_step`` called from it. Outcomes
 match the explicit 8 kHz loop this replaced within the tolerances of tests/test_closed_loop_kernel.py.
 The world is SI; the reduced model is mm, N, N mm: ``ContactBridge`` converts at one place (names carry the unit).
 Object-table contact stays MuJoCo's (elliptic cone): it only decides when the object leaves or touches the table.
