@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from contact._newton import OPEN, STICK, ContactState
+from contact.bumps import BumpResults, bump_results
 from contact.scene import Scene
 from fem.elasticity import ElasticModel
 
@@ -43,6 +44,7 @@ class Increment:
     base_pressure: np.ndarray = field(repr=False, default=None)
     base_traction: np.ndarray = field(repr=False, default=None)
     displacement_full: np.ndarray = field(repr=False, default=None)
+    bumps: BumpResults | None = field(repr=False, default=None)     # per-bump scalars (contact.bumps)
 
     SCALARS = ("load_kind", "normal_force", "tangential_force", "torque", "depth", "shift", "angle", "contact_area",
                "stick_area", "contact_radius", "stick_radius", "stick_ratio", "max_pressure", "iterations",
@@ -64,6 +66,8 @@ class ContactResult:
     mesh_info: dict = field(default_factory=dict)
     left_out: list[str] = field(default_factory=list)
     error: str | None = None
+    candidate_bump: np.ndarray | None = None    # (n,) the bump (nearest first-contact point) of each candidate
+    bump_centers: np.ndarray | None = None      # (k, 2) first-contact points [mm]
 
     @property
     def candidate_positions(self) -> np.ndarray:
@@ -99,10 +103,13 @@ class ContactUnderResolved(ValueError):
 
 
 def record_increment(kind, state: ContactState, iterations, history, model, factorization, candidates, areas,
-                     lever, scene, seconds, multiplicity=1.0, substeps=1) -> Increment:
-    """Post-process a converged state: areas, radii, stick ratio, pressures, full displacement and base traction.
+                     lever, scene, seconds, multiplicity=1.0, substeps=1, bump=None,
+                     bump_centers=None) -> Increment:
+    """Post-process a converged state: areas, radii, stick ratio, pressures, full displacement and base traction,
+    and the per-bump sums when ``bump`` (n,) and ``bump_centers`` (k, 2) are given (``contact.bumps``).
 
     ``multiplicity`` = 2 for a half model: whole-body forces and areas are twice those of the computed half.
+    The bumps' margin to gross slip uses the scene's friction coefficient also in a frictionless press.
     """
     status = state.status
     contact_area = multiplicity * float(areas[status != OPEN].sum())
@@ -121,6 +128,10 @@ def record_increment(kind, state: ContactState, iterations, history, model, fact
     base_forces = reaction[model.base.dofs]                              # (n_base, 3) support force on the gel
     displacement_full = model.full_vector(u_free)
     check_no_penetration(model, candidates, displacement_full, scene, state.depth)
+    bumps = None
+    if bump is not None:
+        bumps = bump_results(bump, bump_centers, status, state.normal_force, state.tangential_force, areas,
+                             model.top.positions[candidates], lever, scene.contact.mu, multiplicity)
     return Increment(
         load_kind=kind, normal_force=multiplicity * float(state.normal_force.sum()),
         # a mirror half carries half of F_x; its F_y and torque are cancelled by the other half
@@ -135,7 +146,7 @@ def record_increment(kind, state: ContactState, iterations, history, model, fact
         max_pressure=float(pressure.max()), iterations=int(iterations), residual=float(history[-1]),
         seconds=float(seconds), substeps=int(substeps), status=status.copy(), pressure=pressure, traction=traction,
         base_pressure=base_forces[:, 2] / model.base.areas, base_traction=base_forces[:, :2] / model.base.areas[:, None],
-        displacement_full=displacement_full)
+        displacement_full=displacement_full, bumps=bumps)
 
 
 def check_no_penetration(model, candidates, displacement_full, scene, depth) -> None:

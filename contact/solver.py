@@ -10,9 +10,11 @@ import numpy as np
 
 from contact._controls import check_feasible, controls as load_controls, scaled, solve_with_substeps
 from contact._newton import OPEN, SLIP, STICK, ContactNotConverged, ContactState, solve_increment
+from contact._newton_linear import NewtonLinearSolver
 from contact.result import (ContactResult, ContactUnderResolved, Increment, LoadNotCarried, PathNotCompleted,
                             record_increment)
-from contact.compliance import SurfaceCompliance
+from contact.bumps import assign_bumps
+from contact.compliance import ColumnCache, SurfaceCompliance, compliance_cache_key
 from contact.scene import LoadKind, Scene
 from fem.elasticity import ElasticModel, assemble_elastic_model
 from fem.linear_solver import SaddlePointFactorization, SpdFactorization
@@ -158,8 +160,13 @@ def _augmentation(areas: np.ndarray, effective_modulus: float) -> np.ndarray:
     return 2.0 * effective_modulus * np.sqrt(areas / np.pi)
 
 
-def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool = False) -> ContactResult:
-    """Solve the scene's load path increment by increment; raise PathNotCompleted (with the partial result) on failure."""
+def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool = False,
+                cache_compliance: bool = True) -> ContactResult:
+    """Solve the scene's load path increment by increment; raise PathNotCompleted (with the partial result) on failure.
+
+    ``cache_compliance``: read the surface compliance columns from the disk cache (``contact.compliance.ColumnCache``)
+    and write the new ones back; off, every column is solved here (benchmarks that time the columns turn it off).
+    """
     prepared = prepared or prepare(scene)
     model = prepared.model
     timings = dict(prepared.timings)
@@ -193,10 +200,20 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
         left_out.append("tangential contact unknowns: the path has no shear or twist load, or mu = 0")
     components = (0, 1, 2) if frictional else (2,)
     compliance_key = (candidates.tobytes(), components)
+    column_cache = ColumnCache() if cache_compliance else None
+    disk_key = None
     if compliance_key not in prepared.compliances:
-        prepared.compliances[compliance_key] = SurfaceCompliance(model, prepared.factorization, candidates, components)
+        compliance = SurfaceCompliance(model, prepared.factorization, candidates, components)
+        if column_cache is not None:
+            disk_key = compliance_cache_key(model, scene.material.E, scene.material.nu, candidates, components,
+                                            prepared.half)
+            stored = column_cache.load(disk_key)
+            if stored is not None:
+                compliance.preload(*stored)
+        prepared.compliances[compliance_key] = compliance
     compliance = prepared.compliances[compliance_key]
     columns_before = compliance.computed_columns
+    seconds_before = compliance.seconds
     positions = model.top.positions[candidates]
     gap0 = scene.body.initial_gap(positions[:, :2]) - positions[:, 2]       # the gel's top point is at z = 0
     lever = np.column_stack([-(positions[:, 1] - scene.body.center[1]), positions[:, 0] - scene.body.center[0]])
@@ -209,8 +226,9 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
     # points (each needing compliance columns).
     seed_depth = 0.5 * estimated_contact(scene)[1]
     result = ContactResult(scene, model, candidates, timings=timings, mesh_info=dict(prepared.mesh_info),
-                           left_out=left_out)
+                           left_out=left_out, candidate_bump=assign_bumps(positions, centers), bump_centers=centers)
     controls = list(load_controls(scene))
+    linear_solver = NewtonLinearSolver()
     bar = None
     if progress:
         from tqdm import tqdm
@@ -229,7 +247,8 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
             def solve(start_state, target):
                 return solve_increment(compliance, gap0, lever, augmentation, mu, start_state, target,
                                        seed_depth=seed_depth, tolerance=scene.contact.tolerance,
-                                       max_iterations=scene.contact.max_iterations, mirror_y=prepared.half)
+                                       max_iterations=scene.contact.max_iterations, mirror_y=prepared.half,
+                                       linear_solver=linear_solver)
 
             try:
                 state, iterations, history, substeps = solve_with_substeps(solve, state, control, lever)
@@ -237,7 +256,8 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
                 raise PathNotCompleted(f"increment {len(result.increments) + 1} ({kind}): {error}", result) from error
             result.increments.append(record_increment(kind, state, iterations, history, model, prepared.factorization,
                                                       candidates, areas, lever, scene,
-                                                      time.perf_counter() - step_start, multiplicity, substeps))
+                                                      time.perf_counter() - step_start, multiplicity, substeps,
+                                                      result.candidate_bump, centers))
             in_contact = int(np.count_nonzero(state.status != OPEN))
             if in_contact < MIN_POINTS_PER_CONTACT * len(centers):
                 raise ContactUnderResolved(
@@ -255,4 +275,18 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
             bar.close()
         timings["contact"] = time.perf_counter() - contact_start
         timings["compliance_columns"] = compliance.computed_columns - columns_before   # new in this solve
+        timings["compliance_seconds"] = compliance.seconds - seconds_before
+        timings["compliance_columns_loaded"] = compliance.loaded if disk_key is not None else 0
+        timings["newton_linear_seconds"] = linear_solver.seconds
+        timings["newton_factorizations"] = linear_solver.factorizations
+        timings["newton_krylov_iterations"] = linear_solver.krylov_iterations
+        if column_cache is not None and compliance.computed_columns > columns_before:
+            key = disk_key or compliance_cache_key(model, scene.material.E, scene.material.nu, candidates, components,
+                                                   prepared.half)
+            try:
+                column_cache.save(key, *compliance.stored())
+            except OSError as error:                 # a full or read-only cache folder must not lose the result
+                import warnings
+
+                warnings.warn(f"compliance columns not cached ({error})", stacklevel=2)
     return result

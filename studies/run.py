@@ -29,8 +29,19 @@ def result_document(result) -> dict:
         "timings": timings,
         "left_out": result.left_out,
         "error": result.error,
-        "increments": [increment.summary() for increment in result.increments],
+        "increments": [_with_bumps(increment.summary(), increment, result) for increment in result.increments],
     }
+
+
+def _has_bumps(result) -> bool:
+    """Per-bump columns are written for scenes with more than one contact (bump arrays under a plate)."""
+    return result.bump_centers is not None and len(result.bump_centers) > 1
+
+
+def _with_bumps(summary: dict, increment, result) -> dict:
+    if _has_bumps(result) and increment.bumps is not None:
+        summary["bumps"] = increment.bumps.rows()
+    return summary
 
 
 def step_rows(result) -> list[dict]:
@@ -43,13 +54,17 @@ def step_rows(result) -> list[dict]:
                 row[f"{key}_x"], row[f"{key}_y"] = value
             else:
                 row[key] = value
+        if _has_bumps(result) and increment.bumps is not None:
+            row.update(increment.bumps.flat())
         rows.append(row)
     return rows
 
 
 def write_vtu(result, out_dir: Path) -> list[Path]:
     """One VTU per increment: displacement [mm], contact state (-1 not a candidate, 0 open, 1 stick, 2 slip),
-    contact pressure and tangential traction [MPa] on the top points, nodal values on the mesh vertices."""
+    contact pressure and tangential traction [MPa] on the top points, nodal values on the mesh vertices; the bump
+    of each candidate point (-1 elsewhere) and its bump's normal force [N], stick ratio and margin to gross slip
+    painted on it (contact.bumps)."""
     import meshio
 
     model = result.model
@@ -69,11 +84,21 @@ def write_vtu(result, out_dir: Path) -> list[Path]:
         state[candidate_vertex[on_vertex]] = increment.status[on_vertex]
         pressure[candidate_vertex[on_vertex]] = increment.pressure[on_vertex]
         traction[candidate_vertex[on_vertex], :2] = increment.traction[on_vertex]
+        bump_data = {}
+        if increment.bumps is not None:
+            bump = np.full(n_vertices, -1.0)
+            bump[candidate_vertex[on_vertex]] = result.candidate_bump[on_vertex]
+            bump_data["bump"] = bump
+            for name in ("normal_force", "stick_ratio", "gross_slip_margin"):
+                painted = np.zeros(n_vertices)
+                painted[candidate_vertex[on_vertex]] = getattr(increment.bumps, name)[result.candidate_bump[on_vertex]]
+                bump_data[f"bump_{name}"] = painted
         displacement = increment.displacement_full[vertex_dofs]
         path = Path(out_dir) / f"increment_{number:03d}.vtu"
         meshio.write(path, meshio.Mesh(mesh.p.T, [("tetra", mesh.t.T)],
                                        point_data={"displacement": displacement, "contact_state": state,
-                                                   "contact_pressure": pressure, "tangential_traction": traction}))
+                                                   "contact_pressure": pressure, "tangential_traction": traction,
+                                                   **bump_data}))
         paths.append(path)
     return paths
 
