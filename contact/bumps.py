@@ -134,5 +134,5 @@ def bump_results(bump: np.ndarray, centers: np.ndarray, status: np.ndarray, norm
         spin_torque=spin, contact_area=contact_area, stick_area=stick_area,
         contact_radius=np.sqrt(contact_area / np.pi),
         stick_ratio=np.where(touching, np.sqrt(stick_area / np.where(touching, contact_area, 1.0)), 0.0),
-        gross_slip_margin=np.where(np.abs(margin) < ROUND_OFF, 0.0, margin), open_points=counts[0], stick_points=counts[1],
-        slip_points=counts[2])
+        gross_slip_margin=np.where(np.abs(margin) < ROUND_OFF, 0.0, margin), open_points=counts[0],
+        stick_points=counts[1], slip_points=counts[2])

@@ -10,8 +10,9 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["FOOTPRINT", "BASE_THICKNESS", "BUMP_FILL", "YOUNGS_MODULUS", "POISSONS_RATIO", "FRICTION", "NORMAL_FORCE",
-           "BENCH_SIZE_CONTACT", "BENCH_SIZE_BASE", "fingertip_gel", "bench_scene", "plate_shear_scene",
-           "sensor_readings", "sensor_array", "bump_layout", "shifts_of"]
+           "BENCH_SIZE_CONTACT", "BENCH_SIZE_BASE", "FRAMES_PER_STATE", "NOISE_GATE", "fingertip_gel", "bench_scene",
+           "plate_shear_scene", "sensor_readings", "sensor_array", "bump_layout", "shifts_of", "estimator_settings",
+           "averaged_cop_shifts"]
 
 FOOTPRINT = 40.0          # mm, square fingertip (paper sec. IV-B)
 BASE_THICKNESS = 3.0      # mm, gel layer between the bumps and the sensor
@@ -31,6 +32,8 @@ NORMAL_FORCE = 2.0        # N, the plate's press, shared by all bumps
 # leave ~2 node spacings across a 4x4 bump's contact (a ~ 0.96 mm, fig6).
 BENCH_SIZE_CONTACT = 0.3
 BENCH_SIZE_BASE = 1.0     # mm on the sensor plane: a third of the 3 mm sensor pitch
+FRAMES_PER_STATE = 10     # frames averaged per quasi-static state of a noisy sensor: 0.1 s at 100 Hz
+NOISE_GATE = 3.0          # node readings below this many noise sigmas (of the averaged reading) count as zero
 
 
 def fingertip_gel(n: int):
@@ -106,3 +109,29 @@ def shifts_of(result, array, layout, settings=None, rng=None):
     readings = sensor_readings(result, array, rng)
     reference = BumpReference.from_readings(readings[:1], array, layout, settings)
     return readings, reference, estimate_slip(readings, array, layout, reference, settings=settings).cop_shift
+
+
+def estimator_settings(array, frames: int = FRAMES_PER_STATE):
+    """EstimatorSettings for ``array``: a noise gate at NOISE_GATE sigmas of a reading averaged over ``frames``
+    frames when its node model has a noise floor, none otherwise (far from a bump the nodes read noise alone, and
+    the centre of pressure would weigh it by its distance)."""
+    from controller.estimator import EstimatorSettings
+
+    if array.node is None or array.node.noise_floor == 0.0:
+        return EstimatorSettings()
+    return EstimatorSettings(node_floor=NOISE_GATE * array.node.force_noise() / np.sqrt(frames))
+
+
+def averaged_cop_shifts(result, array, layout, seed=None, frames: int = FRAMES_PER_STATE):
+    """Per-bump CoP shifts (t, k, 2) [mm] against the first increment, from readings averaged over ``frames``
+    frames per increment (one frame for a noise-free node model); the noise drawn from ``seed``. Also returns the
+    readings (t, ny, nx) [N], the reference and the estimator settings used."""
+    from controller.estimator import BumpReference, estimate_slip
+
+    rng = np.random.default_rng(seed)
+    count = 1 if array.node is None or array.node.noise_floor == 0.0 else frames
+    readings = np.mean([sensor_readings(result, array, rng) for _ in range(count)], axis=0)
+    settings = estimator_settings(array, count)
+    reference = BumpReference.from_readings(readings[:1], array, layout, settings)
+    return estimate_slip(readings, array, layout, reference, settings=settings).cop_shift, readings, reference, \
+        settings

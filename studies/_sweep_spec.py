@@ -25,7 +25,6 @@ from __future__ import annotations
 import copy
 import dataclasses
 import hashlib
-import itertools
 import json
 import math
 import sys
@@ -173,12 +172,6 @@ def sweep_from_dict(data: dict, base_dir: str | Path = ".", quick: bool = False,
     zipped = _axes(data.get("list", {}), "list")
     if not grid and not zipped:
         raise ValueError("the sweep has no axes: give a [grid] and/or a [list] table of dotted keys")
-    both = sorted({k for k, _ in grid} & {k for k, _ in zipped})
-    if both:
-        raise ValueError(f"axis {both[0]!r} is in both [grid] and [list]")
-    lengths = {key: len(values) for key, values in zipped}
-    if len(set(lengths.values())) > 1:
-        raise ValueError(f"[list] axes are zipped and need equal lengths, got {lengths}")
     parsed_outputs = _parse_outputs(data.get("outputs"))
     cases = _build_cases(base, grid, zipped)
     return SweepSpec(name=name, grid=grid, zipped=zipped, outputs=_expand_outputs(parsed_outputs, cases),
@@ -289,17 +282,12 @@ def _expand_outputs(parsed, cases: list[Case]) -> tuple[Output, ...]:
     return tuple(outputs)
 
 
-def _points(grid, zipped) -> list[tuple[tuple[str, object], ...]]:
-    grid_points = list(itertools.product(*[[(key, v) for v in values] for key, values in grid]))
-    zip_points = list(zip(*[[(key, v) for v in values] for key, values in zipped])) or [()]
-    return [tuple(g) + tuple(z) for g in grid_points for z in zip_points]
-
-
 def _build_cases(base: dict, grid, zipped) -> list[Case]:
     from contact.scene import scene_from_dict
+    from fem.task_runner import axis_points
 
     cases, seen = [], {}
-    for parameters in _points(grid, zipped):
+    for parameters in axis_points(grid, zipped):       # checks: no axis twice, equal [list] lengths
         document = copy.deepcopy(base)
         for key, value in parameters:
             set_dotted(document, key, copy.deepcopy(value))

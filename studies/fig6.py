@@ -30,7 +30,6 @@ PITCHES = (1.0, 3.0)                   # mm
 SENSORS = ("cells", "small pads", "capacitive")
 NOISE_DRAWS = 10                       # noise draws of the capacitive sensor (seeds 0 ... 9)
 FRAMES_PER_STATE = 10                  # frames averaged per quasi-static state: 0.1 s at 100 Hz
-NOISE_GATE = 3.0                       # node readings below this many noise sigmas count as zero (estimator)
 
 
 def sensor_model(sensor: str, pitch: float):
@@ -47,26 +46,11 @@ def sensor_model(sensor: str, pitch: float):
     return capacitive_array(pitch, cells.node_counts, pad_gap=0.5, node=CapacitiveNode())
 
 
-def estimator_settings(array):
-    """Noise gate at NOISE_GATE sigmas of the averaged reading for a noisy node model, none otherwise."""
-    from controller.estimator import EstimatorSettings
-
-    if array.node is None or array.node.noise_floor == 0.0:
-        return EstimatorSettings()
-    return EstimatorSettings(node_floor=NOISE_GATE * array.node.force_noise() / np.sqrt(FRAMES_PER_STATE))
-
-
 def cop_shifts(result, array, layout, seed: int | None):
-    """Per-bump CoP shifts (t, k, 2) [mm] from readings averaged over FRAMES_PER_STATE frames per state."""
-    from controller.bench import sensor_readings
-    from controller.estimator import BumpReference, estimate_slip
+    """Per-bump CoP shifts (t, k, 2) [mm], readings averaged over FRAMES_PER_STATE frames per state (noisy sensor)."""
+    from controller.bench import averaged_cop_shifts
 
-    rng = np.random.default_rng(seed)
-    frames = 1 if array.node is None else FRAMES_PER_STATE
-    readings = np.mean([sensor_readings(result, array, rng) for _ in range(frames)], axis=0)
-    settings = estimator_settings(array)
-    reference = BumpReference.from_readings(readings[:1], array, layout, settings)
-    return estimate_slip(readings, array, layout, reference, settings=settings).cop_shift
+    return averaged_cop_shifts(result, array, layout, seed, FRAMES_PER_STATE)[0]
 
 
 def evaluate(cop_shift: np.ndarray, shifts) -> dict:
@@ -143,7 +127,8 @@ def _verdict(rows, arrays) -> list[str]:
     """One line per sensor model and phase: does 1 mm beat 3 mm, which array is best; then the paper's claims."""
     lines = []
     for sensor in SENSORS:
-        for phase, key in (("before calibration", "error_before_percent"), ("after calibration", "error_after_percent")):
+        for phase, key in (("before calibration", "error_before_percent"),
+                           ("after calibration", "error_after_percent")):
             finer, best = _trend(rows, arrays, sensor, key)
             lines.append(f"{sensor}, {phase}: 1 mm pitch lowers the error in {finer} of {len(arrays)} arrays; lowest "
                          f"error at {best[1.0]}x{best[1.0]} (1 mm) and {best[3.0]}x{best[3.0]} (3 mm)")
