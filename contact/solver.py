@@ -18,6 +18,7 @@ from contact.compliance import ColumnCache, SurfaceCompliance, compliance_cache_
 from contact.scene import LoadKind, Scene
 from fem.elasticity import ElasticModel, assemble_elastic_model
 from fem.linear_solver import SaddlePointFactorization, SpdFactorization
+from fem.progress import ticking
 from fem.mesh import BlockMeshSpec, graded_block_mesh, mesh_quality
 
 __all__ = ["Increment", "ContactResult", "PathNotCompleted", "Prepared", "factorize_stiffness", "prepare",
@@ -123,8 +124,9 @@ def factorize_stiffness(model: ElasticModel) -> SpdFactorization | SaddlePointFa
 LOCKING_NU = 0.49     # above this tets lock: the stability study finds c/a ~0.1 low and a 12-21 % small (P1)
 
 
-def prepare(scene: Scene) -> Prepared:
-    """Mesh the gel, assemble K and factorize it once (reused by every increment and by scenes of equal key)."""
+def prepare(scene: Scene, progress: bool = False) -> Prepared:
+    """Mesh the gel, assemble K and factorize it once (reused by every increment and by scenes of equal key);
+    ``progress``: a bar ticking through meshing, assembly and factorization (``fem.progress``)."""
     if scene.material.nu > LOCKING_NU and scene.mesh.volumetric == "standard":
         import warnings
 
@@ -134,15 +136,17 @@ def prepare(scene: Scene) -> Prepared:
     timings = {}
     start = time.perf_counter()
     fine_radius, half = _fine_radius_and_half(scene)
-    mesh = _gel_mesh(scene, fine_radius, half)
+    with ticking(f"{scene.name}: meshing ({scene.gel.shape}, h = {scene.mesh.size_contact:g} mm)", progress):
+        mesh = _gel_mesh(scene, fine_radius, half)
     timings["mesh"] = time.perf_counter() - start
     start = time.perf_counter()
-    model = assemble_elastic_model(mesh, scene.material.E, scene.material.nu, scene.mesh.order,
-                                   symmetry_plane_y=0.0 if half else None, volumetric=scene.mesh.volumetric)
-    timings["assembly"] = time.perf_counter() - start
-    start = time.perf_counter()
-    factorization = factorize_stiffness(model)
-    timings["factorization"] = time.perf_counter() - start
+    with ticking(f"{scene.name}: assembly and factorization", progress):
+        model = assemble_elastic_model(mesh, scene.material.E, scene.material.nu, scene.mesh.order,
+                                       symmetry_plane_y=0.0 if half else None, volumetric=scene.mesh.volumetric)
+        timings["assembly"] = time.perf_counter() - start
+        start = time.perf_counter()
+        factorization = factorize_stiffness(model)
+        timings["factorization"] = time.perf_counter() - start
     quality = mesh_quality(mesh.p, mesh.t)
     mesh_info = {"nodes": int(mesh.p.shape[1]), "elements": int(mesh.t.shape[1]), "dofs": int(model.n_dofs),
                  "free_dofs": int(model.free_dofs.size), "order": scene.mesh.order,
@@ -167,7 +171,7 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
     ``cache_compliance``: read the surface compliance columns from the disk cache (``contact.compliance.ColumnCache``)
     and write the new ones back; off, every column is solved here (benchmarks that time the columns turn it off).
     """
-    prepared = prepared or prepare(scene)
+    prepared = prepared or prepare(scene, progress)
     model = prepared.model
     timings = dict(prepared.timings)
     left_out = []
