@@ -165,11 +165,17 @@ def solve_increment(compliance: SurfaceCompliance, gap0: np.ndarray, lever: np.n
         m = contact.size
         cols = compliance.unknown_index(contact)
         sign = np.tile([1.0, 1.0, -1.0], m) if frictional else -np.ones(m)
-        coupling = compliance.block(cols, cols)                          # a fresh gather: scaled in place
-        coupling *= sign[None, :]                                        # u at contact dofs = coupling @ y
         n_body = int(depth_free) + shift_components.size * int(shift_free) + int(angle_free)
         size = n_comp * m + n_body
-        jac = np.zeros((size, size))
+        unknowns = n_comp * m
+        # the Jacobian is built in place on the compliance block gathered into its top-left corner, by row
+        # operations on strided views (each point's rows are a linear combination of its own rows of C): a few
+        # passes over the (3m)^2 block and no temporaries of its size
+        jac = np.empty((size, size))
+        block = compliance.gather(cols, cols, jac[:unknowns, :unknowns])   # u at contact dofs = (block * sign) @ y
+        block *= sign[None, :]
+        jac[:unknowns, unknowns:] = 0.0
+        jac[unknowns:] = 0.0
         rhs = np.zeros(size)
         rc = r[contact]
         normal_rows = np.arange(m) * n_comp + (n_comp - 1)
@@ -181,8 +187,11 @@ def solve_increment(compliance: SurfaceCompliance, gap0: np.ndarray, lever: np.n
             shift_cols, col = col + np.arange(shift_components.size), col + shift_components.size
         if angle_free:
             angle_col = col
+        if frictional:                                   # the tangential rows below need C's rows before scaling
+            rows_x, rows_y = block[0::3], block[1::3]                       # (m, 3m) views
+            original_x = rows_x.copy()
         # normal rows: r (gap0 - depth - u_z) = 0
-        jac[normal_rows, :n_comp * m] = -rc[:, None] * coupling[n_comp - 1::n_comp]
+        block[n_comp - 1::n_comp] *= -rc[:, None]
         if depth_free:
             jac[normal_rows, depth_col] = -rc
             rhs[normal_rows] = -rc * gap0[contact]
@@ -203,11 +212,13 @@ def solve_increment(compliance: SurfaceCompliance, gap0: np.ndarray, lever: np.n
                               rc[:, None, None] * np.eye(2)[None])
             t_coef = np.where(slipping[:, None, None], np.eye(2)[None] - alpha[:, None, None] * perp, 0.0)
             lam_coef = np.where(slipping[:, None], -mu * direction, 0.0)
-            tangential = coupling.reshape(m, 3, -1)[:, :2, :]              # (m, 2, 3m): d u_t / d y
             rows = (np.arange(m)[:, None] * 3 + np.arange(2)).ravel()
-            # (m, 2, 2) x (m, 2, 3m) per point, written out: einsum took 5 % of a 53k-DOF path
-            jac[rows, :3 * m] = (w_coef[:, :, :1] * tangential[:, :1, :]
-                                 + w_coef[:, :, 1:] * tangential[:, 1:, :]).reshape(2 * m, 3 * m)
+            # rows (x, y) of point k become w_coef[k] @ (C_x, C_y): in place, x first from its copy
+            rows_x *= w_coef[:, 0, :1]
+            rows_x += w_coef[:, 0, 1:] * rows_y
+            rows_y *= w_coef[:, 1, 1:]
+            original_x *= w_coef[:, 1, :1]
+            rows_y += original_x
             local = np.arange(m) * 3
             for a in range(2):
                 for b in range(2):

@@ -30,6 +30,7 @@ KRYLOV_SHARE = 1.0 / 40.0    # at most n / 40 Krylov steps (each 2 matrix-vector
 #                              O(n^3) factorization (compute-bound BLAS 3) would have been cheaper; capped below
 MAX_KRYLOV = 150
 CHANGED_SHARE = 0.5          # refactorize at once when more points changed state than this share of the Krylov cap
+FRESH_KRYLOV = 20            # GMRES steps allowed on single-precision factors of the system itself
 
 
 def gmres(matvec, precondition, residual, tolerance: float, max_iterations: int):
@@ -156,13 +157,15 @@ class NewtonLinearSolver:
         self.krylov_solves = 0
         self.krylov_iterations = 0
         self.seconds = 0.0                # spent in solve() [s]
+        self.double_precision = 0         # factorizations in double precision (single precision's GMRES failed)
 
-    def _factorize(self, jacobian: np.ndarray, keys: np.ndarray, states: np.ndarray):
+    def _factorize(self, jacobian: np.ndarray, keys: np.ndarray, states: np.ndarray, single: bool = False):
         # LAPACK factorizes column-major arrays: J^T of a C-ordered J is one, in place (J itself would be copied);
-        # solves then use the transposed factors (trans=1)
+        # solves then use the transposed factors (trans=1). ``single``: factors of a float32 copy (J is kept)
+        matrix = jacobian.T.astype(np.float32) if single else jacobian.T
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", scipy.linalg.LinAlgWarning)        # a zero pivot is raised below
-            factors = scipy.linalg.lu_factor(jacobian.T, overwrite_a=True, check_finite=False)
+            factors = scipy.linalg.lu_factor(matrix, overwrite_a=True, check_finite=False)
         if not np.all(np.isfinite(factors[0])) or np.any(np.diag(factors[0]) == 0.0):
             raise np.linalg.LinAlgError("singular matrix (a zero pivot in its LU factorization)")
         self.factorizations += 1
@@ -192,6 +195,17 @@ class NewtonLinearSolver:
                 correction = self._krylov(jacobian, rhs - jacobian @ guess, position, known, tolerance, cap)
                 if correction is not None:
                     return guess + correction
+        # single-precision factors (half the time of double's) as the preconditioner of GMRES to the full
+        # tolerance: a few steps, since they invert J to ~1e-7 relative; double-precision factors where that fails
+        try:
+            self._factorize(jacobian, keys, states, single=True)
+            correction = self._krylov(jacobian, rhs - jacobian @ guess, np.argsort(self._order),
+                                      np.ones(n, dtype=bool), tolerance, FRESH_KRYLOV)
+            if correction is not None:
+                return guess + correction
+        except np.linalg.LinAlgError:
+            pass
+        self.double_precision += 1
         factors = self._factorize(np.ascontiguousarray(jacobian), keys, states)     # overwrites jacobian
         return scipy.linalg.lu_solve(factors, rhs, trans=1, check_finite=False)
 
@@ -205,7 +219,9 @@ class NewtonLinearSolver:
             padded = np.zeros(size)
             padded[lu_rows] = vector[known]
             result = vector / diagonal                    # new unknowns: Jacobi
-            result[known] = scipy.linalg.lu_solve(self._factors, padded, trans=1, check_finite=False)[lu_rows]
+            solved = scipy.linalg.lu_solve(self._factors, padded.astype(self._factors[0].dtype), trans=1,
+                                           check_finite=False)
+            result[known] = solved[lu_rows]
             return result
 
         self.krylov_solves += 1

@@ -177,6 +177,15 @@ class SurfaceCompliance:
         self.solves += int(free.size)
         self.seconds += time.perf_counter() - start_time
 
+    def gather(self, row_index: np.ndarray, columns: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """C[rows, columns] written into ``out`` (len(rows), len(columns)) row by row, e.g. the top-left block of a
+        larger system: no temporary of the block's size (a 230k-DOF contact's is 240 MB per Newton iteration)."""
+        self.ensure(columns)
+        slots = self._slot[columns]
+        for position, row in enumerate(np.asarray(row_index)):
+            np.take(self._store[row], slots, out=out[position])
+        return out
+
     def block(self, row_index: np.ndarray, columns: np.ndarray) -> np.ndarray:
         """C[rows, columns] (computing missing columns first), one gather of the stored entries."""
         self.ensure(columns)

@@ -33,6 +33,8 @@ import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from ._design_spec import DesignStudy, FingertipDesign
+
 if sys.version_info >= (3, 11):
     import tomllib
 else:  # pragma: no cover
@@ -108,7 +110,6 @@ QUICK = {"size_contact": 0.7, "size_base": 1.5, "noise_draws": 2}   # --quick: t
 
 def design_spec_from_dict(data: dict, quick: bool = False, source: str = "") -> DesignSweepSpec:
     """DesignSweepSpec from a parsed design file; raises ValueError naming the offending key."""
-    from controller.design import DesignStudy, FingertipDesign
     from fem.task_runner import axis_points
 
     if not isinstance(data, dict):

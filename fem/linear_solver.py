@@ -110,7 +110,7 @@ class _Factorization:
         rhs = np.asarray(rhs, dtype=float)
         if rhs.shape[0] != self.size:
             raise ValueError(f"rhs has {rhs.shape[0]} rows, the matrix {self.size}")
-        if rhs.ndim == 1:
+        if rhs.ndim == 1 or rhs.shape[1] <= self.chunk:          # one block: no copy into an output array
             return self._solve_block(rhs)
         out = np.empty_like(rhs, order="F")
         for start in range(0, rhs.shape[1], self.chunk):

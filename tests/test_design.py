@@ -156,3 +156,9 @@ def test_design_sweep_on_a_local_dask_cluster(tmp_path, quick_sweep):
 
 def test_tables_of_no_records_are_empty_but_typed():
     assert design_table([]).empty and list(increment_table([]).columns)[:3] == ["case_id", "path", "increment"]
+
+
+def test_design_table_columns_are_the_design_fields():
+    from controller.design import DESIGN_COLUMNS
+
+    assert DESIGN_COLUMNS == tuple(f.name for f in dataclasses.fields(FingertipDesign))

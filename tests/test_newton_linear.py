@@ -59,8 +59,9 @@ def test_reused_factorization_solves_a_sequence_of_changing_systems():
         solution = solver.solve(current.copy(), rhs, keys, states, previous, TOLERANCE)
         assert np.allclose(solution, expected, atol=TOLERANCE)
         previous = solution
-    # up to 6 points changed since the factorization (a rank-6 change plus small ones): GMRES with it each time
-    assert solver.factorizations == 1 and solver.krylov_solves == 3
+    # the first system: single-precision factors and GMRES on them; then up to 6 points changed since that
+    # factorization (a rank-6 change plus small ones): GMRES with it each time, never a double-precision LU
+    assert solver.factorizations == 1 and solver.krylov_solves == 4 and solver.double_precision == 0
 
 
 def test_reused_factorization_serves_a_system_with_fewer_unknowns():
