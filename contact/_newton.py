@@ -19,11 +19,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from contact._newton_linear import (NewtonLinearSolver, eliminate_slip_directions, restore_slip_directions,
+                                    rotate_slip_guess)
 from contact.compliance import SurfaceCompliance
 
 __all__ = ["ContactState", "BodyControl", "ContactNotConverged", "solve_increment"]
 
 OPEN, STICK, SLIP = 0, 1, 2
+ON_CONE = 1e-8       # relative distance to the friction cone within which a trial traction is on it (Newton tol 1e-10)
 
 
 class ContactNotConverged(RuntimeError):
@@ -78,7 +81,9 @@ def _project_disc(vectors: np.ndarray, radius: np.ndarray) -> np.ndarray:
 def solve_increment(compliance: SurfaceCompliance, gap0: np.ndarray, lever: np.ndarray, augmentation: np.ndarray,
                     friction_coefficient: float, previous: ContactState, control: BodyControl,
                     seed_depth: float | None = None, tolerance: float = 1e-10,
-                    max_iterations: int = 60, mirror_y: bool = False) -> tuple[ContactState, int, list[float]]:
+                    max_iterations: int = 60, mirror_y: bool = False,
+                    linear_solver: NewtonLinearSolver | None = None,
+                    reduce_slip: bool = True) -> tuple[ContactState, int, list[float]]:
     """Solve one increment; return the converged state, the number of iterations and the residual history.
 
     gap0 : (n,) initial gap of each candidate point to the body at zero depth [mm]
@@ -87,6 +92,10 @@ def solve_increment(compliance: SurfaceCompliance, gap0: np.ndarray, lever: np.n
     seed_depth : starting depth when the body is force-controlled and not yet in contact [mm]
     mirror_y : the points are the half y >= 0 of a body mirror-symmetric about y = 0: the body's y-shift is held
         at 0 (the other half balances the y-forces of this one)
+    linear_solver : reuses LU factors across the Newton systems of a path (``contact._newton_linear``); pass one
+        per path. None: a fresh dense LU solve per iteration.
+    reduce_slip : drop the slip-direction force of each sliding point from the Newton system (it is mu lambda
+        there; ``eliminate_slip_directions``): the same solution from a smaller system.
     """
     frictional = compliance.components == (0, 1, 2)
     n_comp = len(compliance.components)
@@ -156,10 +165,17 @@ def solve_increment(compliance: SurfaceCompliance, gap0: np.ndarray, lever: np.n
         m = contact.size
         cols = compliance.unknown_index(contact)
         sign = np.tile([1.0, 1.0, -1.0], m) if frictional else -np.ones(m)
-        coupling = compliance.block(cols, cols) * sign[None, :]          # u at contact dofs = coupling @ y
         n_body = int(depth_free) + shift_components.size * int(shift_free) + int(angle_free)
         size = n_comp * m + n_body
-        jac = np.zeros((size, size))
+        unknowns = n_comp * m
+        # the Jacobian is built in place on the compliance block gathered into its top-left corner, by row
+        # operations on strided views (each point's rows are a linear combination of its own rows of C): a few
+        # passes over the (3m)^2 block and no temporaries of its size
+        jac = np.empty((size, size))
+        block = compliance.gather(cols, cols, jac[:unknowns, :unknowns])   # u at contact dofs = (block * sign) @ y
+        block *= sign[None, :]
+        jac[:unknowns, unknowns:] = 0.0
+        jac[unknowns:] = 0.0
         rhs = np.zeros(size)
         rc = r[contact]
         normal_rows = np.arange(m) * n_comp + (n_comp - 1)
@@ -171,8 +187,11 @@ def solve_increment(compliance: SurfaceCompliance, gap0: np.ndarray, lever: np.n
             shift_cols, col = col + np.arange(shift_components.size), col + shift_components.size
         if angle_free:
             angle_col = col
+        if frictional:                                   # the tangential rows below need C's rows before scaling
+            rows_x, rows_y = block[0::3], block[1::3]                       # (m, 3m) views
+            original_x = rows_x.copy()
         # normal rows: r (gap0 - depth - u_z) = 0
-        jac[normal_rows, :n_comp * m] = -rc[:, None] * coupling[n_comp - 1::n_comp]
+        block[n_comp - 1::n_comp] *= -rc[:, None]
         if depth_free:
             jac[normal_rows, depth_col] = -rc
             rhs[normal_rows] = -rc * gap0[contact]
@@ -181,7 +200,10 @@ def solve_increment(compliance: SurfaceCompliance, gap0: np.ndarray, lever: np.n
         if frictional:
             z = tan[contact] - rc[:, None] * slip_inc[contact]
             z_norm = np.linalg.norm(z, axis=1)
-            slipping = (z_norm > mu * lam_hat[contact]) | (mu == 0.0)    # mu = 0: every point slides freely
+            # on the cone within ON_CONE counts as sliding: at the start of an increment the sliding points of the
+            # last one sit there (their slip increment is zero), and treating them as stuck (half of them, by
+            # round-off) flipped hundreds of point states between the first two iterations of every increment
+            slipping = (z_norm > mu * lam_hat[contact] * (1.0 - ON_CONE)) | (mu == 0.0)   # mu = 0: all slide
             direction = z / np.maximum(z_norm, 1e-300)[:, None]
             perp = np.eye(2)[None] - direction[:, :, None] * direction[:, None, :]
             alpha = np.where(slipping, mu * lam_hat[contact] / np.maximum(z_norm, 1e-300), 0.0)
@@ -190,9 +212,13 @@ def solve_increment(compliance: SurfaceCompliance, gap0: np.ndarray, lever: np.n
                               rc[:, None, None] * np.eye(2)[None])
             t_coef = np.where(slipping[:, None, None], np.eye(2)[None] - alpha[:, None, None] * perp, 0.0)
             lam_coef = np.where(slipping[:, None], -mu * direction, 0.0)
-            tangential = coupling.reshape(m, 3, -1)[:, :2, :]              # (m, 2, 3m): d u_t / d y
             rows = (np.arange(m)[:, None] * 3 + np.arange(2)).ravel()
-            jac[rows, :3 * m] = np.einsum("kab,kbj->kaj", w_coef, tangential).reshape(2 * m, 3 * m)
+            # rows (x, y) of point k become w_coef[k] @ (C_x, C_y): in place, x first from its copy
+            rows_x *= w_coef[:, 0, :1]
+            rows_x += w_coef[:, 0, 1:] * rows_y
+            rows_y *= w_coef[:, 1, 1:]
+            original_x *= w_coef[:, 1, :1]
+            rows_y += original_x
             local = np.arange(m) * 3
             for a in range(2):
                 for b in range(2):
@@ -223,10 +249,30 @@ def solve_increment(compliance: SurfaceCompliance, gap0: np.ndarray, lever: np.n
             jac[row, np.arange(m) * 3] = lever[contact, 0]
             jac[row, np.arange(m) * 3 + 1] = lever[contact, 1]
             rhs[row] = target_torque
+        eliminated = np.zeros(0, dtype=int)
+        if frictional and reduce_slip:
+            held_point = np.zeros(m, dtype=bool)
+            held_point[held // 3] = True
+            eliminated = np.flatnonzero(slipping & (z_norm > 0.0) & ~held_point)
+        kept = None
+        if eliminated.size:
+            jac, rhs, kept = eliminate_slip_directions(jac, rhs, eliminated, direction[eliminated], mu)
         try:
-            solution = np.linalg.solve(jac, rhs)
+            if linear_solver is None:
+                solution = np.linalg.solve(jac, rhs)
+            else:
+                keys, states, guess = _unknowns(contact, n_comp, lam, tan, slipping if frictional else None,
+                                                depth_free, depth, shift_free, shift_components, shift,
+                                                angle_free, angle)
+                if kept is not None:
+                    keys, states = keys[kept], states[kept]
+                    guess = rotate_slip_guess(guess, kept, eliminated, direction[eliminated])
+                # the linear residual [N] enters the next Newton residual: keep it a tenth of the tolerance
+                solution = linear_solver.solve(jac, rhs, keys, states, guess, 0.1 * tolerance * force_scale)
         except np.linalg.LinAlgError as error:
             raise ContactNotConverged(f"singular Newton system at iteration {iteration} ({error})", history) from None
+        if kept is not None:
+            solution = restore_slip_directions(solution, kept, size, eliminated, direction[eliminated], mu)
         lam = np.zeros(n)
         lam[contact] = solution[normal_rows]
         if frictional:
@@ -240,6 +286,32 @@ def solve_increment(compliance: SurfaceCompliance, gap0: np.ndarray, lever: np.n
         if angle_free:
             angle = float(solution[angle_col])
     raise ContactNotConverged(f"no convergence in {max_iterations} Newton iterations", history)
+
+
+BODY_KEYS = {"depth": -1, "shift": (-2, -3), "angle": -4}    # names of the body unknowns in a Newton system
+
+
+def _unknowns(contact, n_comp, lam, tan, slipping, depth_free, depth, shift_free, shift_components, shift,
+              angle_free, angle):
+    """Keys, state codes and current values of a Newton system's unknowns, in its column order."""
+    keys = [(contact[:, None] * n_comp + np.arange(n_comp)).ravel()]
+    point_state = np.where(slipping, SLIP, STICK) if slipping is not None else np.full(contact.size, STICK)
+    states = [np.repeat(point_state, n_comp)]
+    values = [np.column_stack([tan[contact], lam[contact]]).ravel() if n_comp == 3 else lam[contact]]
+    body_keys, body_values = [], []
+    if depth_free:
+        body_keys.append(BODY_KEYS["depth"])
+        body_values.append(depth)
+    if shift_free:
+        body_keys.extend(BODY_KEYS["shift"][a] for a in shift_components)
+        body_values.extend(shift[a] for a in shift_components)
+    if angle_free:
+        body_keys.append(BODY_KEYS["angle"])
+        body_values.append(angle)
+    keys.append(np.asarray(body_keys, dtype=np.int64))
+    states.append(np.full(len(body_keys), OPEN))
+    values.append(np.asarray(body_values, dtype=float))
+    return np.concatenate(keys), np.concatenate(states), np.concatenate(values)
 
 
 def _finish(compliance, lam, tan, u, depth, shift, angle, gap, slip_inc, r, mu) -> ContactState:

@@ -131,6 +131,11 @@ class HalfSpaceCompliance:
                                                                self._offset_j(row_j, column_j, True) + self.reach_y - 1)]
         return matrix
 
+    def gather(self, row_index: np.ndarray, columns: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """C[rows, columns] written into ``out`` (the Newton step's interface with SurfaceCompliance)."""
+        out[...] = self.block(row_index, columns)
+        return out
+
     def traction_grid(self, columns: np.ndarray, forces: np.ndarray) -> np.ndarray:
         """(3, n_x, n_y) cell forces [N] from forces on flat dof indices (the full plane's lower half mirrored in)."""
         grid = np.zeros((3, self.n_x, self.n_y))
@@ -212,7 +217,6 @@ def solve_halfspace(scene: Scene, spacing: float, extent: float | None = None) -
     """
     from contact._controls import check_feasible, controls as load_controls, scaled, solve_with_substeps
     from contact._newton import OPEN, STICK, ContactState, solve_increment
-    from contact.recovery import recover_contact
     from contact.solver import estimated_contact
 
     if scene.body.shape != "sphere":

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from contact._newton import OPEN, STICK, ContactState
+from contact.bumps import BumpResults, bump_results
 from contact.scene import Scene
 from fem.elasticity import ElasticModel
 
@@ -47,6 +48,7 @@ class Increment:
     base_pressure: np.ndarray = field(repr=False, default=None)
     base_traction: np.ndarray = field(repr=False, default=None)
     displacement_full: np.ndarray = field(repr=False, default=None)
+    bumps: BumpResults | None = field(repr=False, default=None)     # per-bump scalars (contact.bumps)
 
     SCALARS = ("load_kind", "normal_force", "tangential_force", "torque", "depth", "shift", "angle", "contact_area",
                "stick_area", "contact_radius", "stick_radius", "stick_ratio", "max_pressure", "iterations",
@@ -69,6 +71,8 @@ class ContactResult:
     mesh_info: dict = field(default_factory=dict)
     left_out: list[str] = field(default_factory=list)
     error: str | None = None
+    candidate_bump: np.ndarray | None = None    # (n,) the bump (nearest first-contact point) of each candidate
+    bump_centers: np.ndarray | None = None      # (k, 2) first-contact points [mm]
 
     @property
     def candidate_positions(self) -> np.ndarray:
@@ -104,12 +108,15 @@ class ContactUnderResolved(ValueError):
 
 
 def record_increment(kind, state: ContactState, iterations, history, model, factorization, candidates, areas,
-                     lever, scene, seconds, multiplicity=1.0, substeps=1, candidate_triangles=None) -> Increment:
+                     lever, scene, seconds, multiplicity=1.0, substeps=1, candidate_triangles=None, bump=None,
+                     bump_centers=None) -> Increment:
     """Post-process a converged state: areas, radii, stick ratio, pressures, full displacement and base traction,
-    and the boundaries and pressure recovered below the element size (``contact.recovery``).
+    the boundaries and pressure recovered below the element size (``contact.recovery``), and the per-bump sums when
+    ``bump`` (n,) and ``bump_centers`` (k, 2) are given (``contact.bumps``).
 
     ``multiplicity`` = 2 for a half model: whole-body forces and areas are twice those of the computed half.
     ``candidate_triangles``: the top triangles among the candidates (``contact.recovery.surface_triangles``).
+    The bumps' margin to gross slip uses the scene's friction coefficient also in a frictionless press.
     """
     from contact.recovery import recover_contact, surface_triangles
 
@@ -134,6 +141,10 @@ def record_increment(kind, state: ContactState, iterations, history, model, fact
         candidate_triangles = surface_triangles(model.top.triangles, candidates, model.top.areas.size)
     recovered = recover_contact(model.top.positions[candidates], candidate_triangles, areas, state.normal_force,
                                 state.tangential_force, status, scene.contact.friction_coefficient, mirror_y=multiplicity == 2.0)
+    bumps = None
+    if bump is not None:
+        bumps = bump_results(bump, bump_centers, status, state.normal_force, state.tangential_force, areas,
+                             model.top.positions[candidates], lever, scene.contact.friction_coefficient, multiplicity)
     return Increment(
         load_kind=kind, normal_force=multiplicity * float(state.normal_force.sum()),
         # a mirror half carries half of F_x; its F_y and torque are cancelled by the other half
@@ -149,7 +160,7 @@ def record_increment(kind, state: ContactState, iterations, history, model, fact
         seconds=float(seconds), substeps=int(substeps), status=status.copy(), pressure=pressure, traction=traction,
         base_pressure=base_forces[:, 2] / model.base.areas, base_traction=base_forces[:, :2] / model.base.areas[:, None],
         displacement_full=displacement_full, recovered_contact_radius=recovered.contact_radius,
-        recovered_stick_ratio=recovered.stick_ratio, recovered_peak_pressure=recovered.peak_pressure)
+        recovered_stick_ratio=recovered.stick_ratio, recovered_peak_pressure=recovered.peak_pressure, bumps=bumps)
 
 
 def check_no_penetration(model, candidates, displacement_full, scene, depth) -> None:

@@ -9,15 +9,18 @@ import numpy as np
 
 from contact._controls import check_feasible, controls as load_controls, scaled, solve_with_substeps
 from contact._newton import OPEN, SLIP, STICK, ContactNotConverged, ContactState, solve_increment
+from contact._newton_linear import NewtonLinearSolver
 from contact.result import (ContactResult, ContactUnderResolved, Increment, LoadNotCarried, PathNotCompleted,
                             record_increment)
-from contact.compliance import SurfaceCompliance
+from contact.bumps import assign_bumps
+from contact.compliance import ColumnCache, SurfaceCompliance, compliance_cache_key
 from contact.limits import (PhysicalLimitError, check_increment_limits, check_resources, check_scene_limits,
                             contact_centers, estimated_contact)
 from contact.recovery import surface_triangles
 from contact.scene import Scene
 from fem.elasticity import ElasticModel, assemble_elastic_model
 from fem.linear_solver import SaddlePointFactorization, SpdFactorization
+from fem.progress import ticking
 from fem.mesh import BlockMeshSpec, graded_block_mesh, mesh_quality
 
 __all__ = ["Increment", "ContactResult", "PathNotCompleted", "Prepared", "factorize_stiffness", "prepare",
@@ -84,8 +87,9 @@ def factorize_stiffness(model: ElasticModel) -> SpdFactorization | SaddlePointFa
 LOCKING_NU = 0.49     # above this tets lock: the stability study finds c/a ~0.1 low and a 12-21 % small (P1)
 
 
-def prepare(scene: Scene) -> Prepared:
-    """Mesh the gel, assemble K and factorize it once (reused by every increment and by scenes of equal key)."""
+def prepare(scene: Scene, progress: bool = False) -> Prepared:
+    """Mesh the gel, assemble K and factorize it once (reused by every increment and by scenes of equal key);
+    ``progress``: a bar ticking through meshing, assembly and factorization (``fem.progress``)."""
     if scene.material.nu > LOCKING_NU and scene.mesh.volumetric == "standard":
         import warnings
 
@@ -96,15 +100,17 @@ def prepare(scene: Scene) -> Prepared:
     start = time.perf_counter()
     fine_radius, half = _fine_radius_and_half(scene)
     estimate = check_resources(scene, fine_radius, half)         # before meshing: refuse what cannot fit
-    mesh = _gel_mesh(scene, fine_radius, half)
+    with ticking(f"{scene.name}: meshing ({scene.gel.shape}, h = {scene.mesh.size_contact:g} mm)", progress):
+        mesh = _gel_mesh(scene, fine_radius, half)
     timings["mesh"] = time.perf_counter() - start
     start = time.perf_counter()
-    model = assemble_elastic_model(mesh, scene.material.E, scene.material.nu, scene.mesh.order,
-                                   symmetry_plane_y=0.0 if half else None, volumetric=scene.mesh.volumetric)
-    timings["assembly"] = time.perf_counter() - start
-    start = time.perf_counter()
-    factorization = factorize_stiffness(model)
-    timings["factorization"] = time.perf_counter() - start
+    with ticking(f"{scene.name}: assembly and factorization", progress):
+        model = assemble_elastic_model(mesh, scene.material.E, scene.material.nu, scene.mesh.order,
+                                       symmetry_plane_y=0.0 if half else None, volumetric=scene.mesh.volumetric)
+        timings["assembly"] = time.perf_counter() - start
+        start = time.perf_counter()
+        factorization = factorize_stiffness(model)
+        timings["factorization"] = time.perf_counter() - start
     quality = mesh_quality(mesh.p, mesh.t)
     mesh_info = {"nodes": int(mesh.p.shape[1]), "elements": int(mesh.t.shape[1]), "dofs": int(model.n_dofs),
                  "free_dofs": int(model.free_dofs.size), "order": scene.mesh.order,
@@ -122,14 +128,17 @@ def _augmentation(areas: np.ndarray, effective_modulus: float) -> np.ndarray:
     return 2.0 * effective_modulus * np.sqrt(areas / np.pi)
 
 
-def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool = False) -> ContactResult:
+def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool = False,
+                cache_compliance: bool = True) -> ContactResult:
     """Solve the scene's load path increment by increment; raise PathNotCompleted (with the partial result) on failure.
 
     The physical limits (contact.limits) are checked first: a press past small strain or a contact wider than the
     body's curvature is refused before meshing, and each increment's depth and sliding are checked as it converges.
+    ``cache_compliance``: read the surface compliance columns from the disk cache (``contact.compliance.ColumnCache``)
+    and write the new ones back; off, every column is solved here (benchmarks that time the columns turn it off).
     """
     check_scene_limits(scene)
-    prepared = prepared or prepare(scene)
+    prepared = prepared or prepare(scene, progress)
     model = prepared.model
     timings = dict(prepared.timings)
     left_out = []
@@ -163,10 +172,20 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
                         "friction_coefficient = 0")
     components = (0, 1, 2) if frictional else (2,)
     compliance_key = (candidates.tobytes(), components)
+    column_cache = ColumnCache() if cache_compliance else None
+    disk_key = None
     if compliance_key not in prepared.compliances:
-        prepared.compliances[compliance_key] = SurfaceCompliance(model, prepared.factorization, candidates, components)
+        compliance = SurfaceCompliance(model, prepared.factorization, candidates, components)
+        if column_cache is not None:
+            disk_key = compliance_cache_key(model, scene.material.E, scene.material.nu, candidates, components,
+                                            prepared.half)
+            stored = column_cache.load(disk_key)
+            if stored is not None:
+                compliance.preload(*stored)
+        prepared.compliances[compliance_key] = compliance
     compliance = prepared.compliances[compliance_key]
     columns_before = compliance.computed_columns
+    seconds_before = compliance.seconds
     positions = model.top.positions[candidates]
     gap0 = scene.body.initial_gap(positions[:, :2]) - positions[:, 2]       # the gel's top point is at z = 0
     lever = np.column_stack([-(positions[:, 1] - scene.body.center[1]), positions[:, 0] - scene.body.center[0]])
@@ -180,9 +199,10 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
     # points (each needing compliance columns).
     seed_depth = 0.5 * estimated_contact(scene)[1]
     result = ContactResult(scene, model, candidates, timings=timings, mesh_info=dict(prepared.mesh_info),
-                           left_out=left_out)
+                           left_out=left_out, candidate_bump=assign_bumps(positions, centers), bump_centers=centers)
     controls = list(load_controls(scene))
     warned: set = set()
+    linear_solver = NewtonLinearSolver()
     bar = None
     if progress:
         from tqdm import tqdm
@@ -201,7 +221,8 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
             def solve(start_state, target):
                 return solve_increment(compliance, gap0, lever, augmentation, friction_coefficient, start_state,
                                        target, seed_depth=seed_depth, tolerance=scene.contact.tolerance,
-                                       max_iterations=scene.contact.max_iterations, mirror_y=prepared.half)
+                                       max_iterations=scene.contact.max_iterations, mirror_y=prepared.half,
+                                       linear_solver=linear_solver)
 
             try:
                 state, iterations, history, substeps = solve_with_substeps(solve, state, control, lever)
@@ -210,7 +231,7 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
             result.increments.append(record_increment(kind, state, iterations, history, model, prepared.factorization,
                                                       candidates, areas, lever, scene,
                                                       time.perf_counter() - step_start, multiplicity, substeps,
-                                                      candidate_triangles))
+                                                      candidate_triangles, result.candidate_bump, centers))
             increment = result.increments[-1]
             touching = state.status != OPEN
             tangential = increment.displacement_full[model.top.dofs[candidates[touching], :2]]    # (k, 2)
@@ -234,4 +255,18 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
             bar.close()
         timings["contact"] = time.perf_counter() - contact_start
         timings["compliance_columns"] = compliance.computed_columns - columns_before   # new in this solve
+        timings["compliance_seconds"] = compliance.seconds - seconds_before
+        timings["compliance_columns_loaded"] = compliance.loaded if disk_key is not None else 0
+        timings["newton_linear_seconds"] = linear_solver.seconds
+        timings["newton_factorizations"] = linear_solver.factorizations
+        timings["newton_krylov_iterations"] = linear_solver.krylov_iterations
+        if column_cache is not None and compliance.computed_columns > columns_before:
+            key = disk_key or compliance_cache_key(model, scene.material.E, scene.material.nu, candidates, components,
+                                                   prepared.half)
+            try:
+                column_cache.save(key, *compliance.stored())
+            except OSError as error:                 # a full or read-only cache folder must not lose the result
+                import warnings
+
+                warnings.warn(f"compliance columns not cached ({error})", stacklevel=2)
     return result

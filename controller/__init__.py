@@ -10,7 +10,9 @@ from .calibration import EstimatorCalibration, PositionSource, calibrate_gain
 from .estimator import (BumpLayout, BumpReference, EstimatorSettings, SlipEstimate, bump_positions, estimate_slip,
                         rotational_stick_ratio, translational_stick_ratio)
 from .rigid_transform import FrameStatus, RigidTransformTrace, fit_rigid_transform
-from .sensor import Interpolation, PressureField, SensorArray, cell_force_operator, resample_time_series, sample
+from .capacitive import CapacitiveNode
+from .sensor import (Interpolation, PressureField, SensorArray, capacitive_array, cell_force_operator,
+                     resample_time_series, sample)
 
 __all__ = [
     "AccelerationControlParameters",
@@ -46,6 +48,8 @@ __all__ = [
     "Interpolation",
     "PressureField",
     "SensorArray",
+    "CapacitiveNode",
+    "capacitive_array",
     "cell_force_operator",
     "resample_time_series",
     "sample",

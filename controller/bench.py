@@ -10,8 +10,9 @@ from __future__ import annotations
 import numpy as np
 
 __all__ = ["FOOTPRINT", "BASE_THICKNESS", "BUMP_FILL", "YOUNGS_MODULUS", "POISSONS_RATIO", "FRICTION", "NORMAL_FORCE",
-           "BENCH_SIZE_CONTACT", "BENCH_SIZE_BASE", "fingertip_gel", "bench_scene", "sensor_readings", "sensor_array",
-           "bump_layout", "shifts_of"]
+           "BENCH_SIZE_CONTACT", "BENCH_SIZE_BASE", "FRAMES_PER_STATE", "NOISE_GATE", "fingertip_gel", "bench_scene",
+           "plate_shear_scene", "sensor_readings", "sensor_array", "bump_layout", "shifts_of", "estimator_settings",
+           "averaged_cop_shifts"]
 
 FOOTPRINT = 40.0          # mm, square fingertip (paper sec. IV-B)
 BASE_THICKNESS = 3.0      # mm, gel layer between the bumps and the sensor
@@ -31,6 +32,8 @@ NORMAL_FORCE = 2.0        # N, the plate's press, shared by all bumps
 # leave ~2 node spacings across a 4x4 bump's contact (a ~ 0.96 mm, fig6).
 BENCH_SIZE_CONTACT = 0.3
 BENCH_SIZE_BASE = 1.0     # mm on the sensor plane: a third of the 3 mm sensor pitch
+FRAMES_PER_STATE = 10     # frames averaged per quasi-static state of a noisy sensor: 0.1 s at 100 Hz
+NOISE_GATE = 3.0          # node readings below this many noise sigmas (of the averaged reading) count as zero
 
 
 def fingertip_gel(n: int):
@@ -56,15 +59,31 @@ def bench_scene(n: int, kind: str, values, size_contact: float, size_base: float
                  loads=(Load(LoadKind.PRESS, "force", (NORMAL_FORCE,)), motion))
 
 
-def sensor_readings(result, array) -> np.ndarray:
-    """Readings (t, ny, nx) [N] of ``array`` for every increment of an FEM result (noise-free)."""
+def plate_shear_scene(name: str, gel, normal_force: float, load_ratios, size_contact: float, size_far: float = 3.0,
+                      fine_radius: float | None = None, youngs_modulus: float = 1.0, poissons_ratio: float = 0.45,
+                      friction_coefficient: float = 0.5):
+    """A rigid plate pressed on ``gel`` (a GelSpec) with ``normal_force`` [N] (frictionless), then sheared along +x
+    by force control to Q/(mu P) = each of ``load_ratios`` (Figs. 3 and 4). Material E [MPa], nu; mesh sizes [mm]."""
+    from contact.scene import BodySpec, ContactSpec, Load, LoadKind, Material, MeshSettings, Scene
+
+    mu = friction_coefficient
+    return Scene(name=name, gel=gel, material=Material(youngs_modulus, poissons_ratio), body=BodySpec("plane"),
+                 contact=ContactSpec(friction_coefficient=mu, frictionless_press=True),
+                 mesh=MeshSettings(size_contact=size_contact, size_far=size_far, fine_radius=fine_radius),
+                 loads=(Load(LoadKind.PRESS, "force", (normal_force,)),
+                        Load(LoadKind.SHEAR, "force", tuple(float(r * mu * normal_force) for r in load_ratios))))
+
+
+def sensor_readings(result, array, rng=None) -> np.ndarray:
+    """Readings (t, ny, nx) [N] of ``array`` for every increment of an FEM result (one frame per increment; the
+    node model's noise, if any, drawn from ``rng``: a Generator, a seed or None)."""
     from controller.sensor import PressureField, cell_force_operator, sample
 
     base = result.model.base
     pressure = np.stack([increment.base_pressure for increment in result.increments])      # (t, n_base)
     field = PressureField(base.positions[:, :2], base.triangles, pressure)
     operator = cell_force_operator(field.positions, field.triangles, array)
-    return sample(field, array, operator=operator)
+    return sample(field, array, rng=rng, operator=operator)
 
 
 def sensor_array(pitch: float):
@@ -81,10 +100,38 @@ def bump_layout(n: int):
     return BumpLayout.grid((n, n), FOOTPRINT / n)
 
 
-def shifts_of(result, array, layout):
-    """Per-bump CoP shifts (t, k, 2) [mm] relative to the pressed, unsheared first increment, and the reference."""
+def shifts_of(result, array, layout, settings=None, rng=None):
+    """Readings, the reference (the pressed, unsheared first increment) and the per-bump CoP shifts (t, k, 2) [mm]
+    against it; ``settings`` (EstimatorSettings) default, ``rng`` for the sensor's noise (``sensor_readings``)."""
+    from controller.estimator import BumpReference, EstimatorSettings, estimate_slip
+
+    settings = EstimatorSettings() if settings is None else settings
+    readings = sensor_readings(result, array, rng)
+    reference = BumpReference.from_readings(readings[:1], array, layout, settings)
+    return readings, reference, estimate_slip(readings, array, layout, reference, settings=settings).cop_shift
+
+
+def estimator_settings(array, frames: int = FRAMES_PER_STATE):
+    """EstimatorSettings for ``array``: a noise gate at NOISE_GATE sigmas of a reading averaged over ``frames``
+    frames when its node model has a noise floor, none otherwise (far from a bump the nodes read noise alone, and
+    the centre of pressure would weigh it by its distance)."""
+    from controller.estimator import EstimatorSettings
+
+    if array.node is None or array.node.noise_floor == 0.0:
+        return EstimatorSettings()
+    return EstimatorSettings(node_floor=NOISE_GATE * array.node.force_noise() / np.sqrt(frames))
+
+
+def averaged_cop_shifts(result, array, layout, seed=None, frames: int = FRAMES_PER_STATE):
+    """Per-bump CoP shifts (t, k, 2) [mm] against the first increment, from readings averaged over ``frames``
+    frames per increment (one frame for a noise-free node model); the noise drawn from ``seed``. Also returns the
+    readings (t, ny, nx) [N], the reference and the estimator settings used."""
     from controller.estimator import BumpReference, estimate_slip
 
-    readings = sensor_readings(result, array)
-    reference = BumpReference.from_readings(readings[:1], array, layout)
-    return readings, reference, estimate_slip(readings, array, layout, reference).cop_shift
+    rng = np.random.default_rng(seed)
+    count = 1 if array.node is None or array.node.noise_floor == 0.0 else frames
+    readings = np.mean([sensor_readings(result, array, rng) for _ in range(count)], axis=0)
+    settings = estimator_settings(array, count)
+    reference = BumpReference.from_readings(readings[:1], array, layout, settings)
+    return estimate_slip(readings, array, layout, reference, settings=settings).cop_shift, readings, reference, \
+        settings

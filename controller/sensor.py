@@ -6,6 +6,10 @@ contact model, or a callable p(x, y) tabulated on a grid). Each sensor node read
 pitch x pitch square centred on the node: the field is clipped against the cell squares exactly (Sutherland-Hodgman
 on convex polygons), so a field inside the array footprint keeps its total force to round-off. Offset, Gaussian noise
 and quantization follow, in that order (paper sec. IV-B: 11 x 13 nodes at 3 mm pitch, sampled at 100 Hz).
+
+A capacitive array (``capacitive_array``, ``controller.capacitive``) reads pads smaller than the cells, ``fill_factor``
+of the cell area, through a node model with a saturating pressure-capacitance curve, crosstalk, a noise floor and a
+converter. ``SensorArray()`` keeps the ideal cell integrator: fill 1 and no node model.
 """
 
 from __future__ import annotations
@@ -19,10 +23,13 @@ import scipy.sparse as sp
 
 from fem.validation import check_finite_array, check_positive, check_range
 
+from .capacitive import CapacitiveNode
+
 __all__ = [
     "Interpolation",
     "PressureField",
     "SensorArray",
+    "capacitive_array",
     "cell_force_operator",
     "resample_time_series",
     "sample",
@@ -141,6 +148,10 @@ class SensorArray:
     offset : float -- constant offset added to every reading [N].
     quantization_step : float -- reading resolution [N]; 0 means no quantization.
     sample_rate_hz : float -- frame rate of the array [Hz], > 0.
+    fill_factor : float -- pad area / cell area [-], in (0, 1]: each node reads a centred square pad of side
+        pitch sqrt(fill_factor); 1 (default) reads the whole cell.
+    node : CapacitiveNode or None -- the capacitive node model the pad force goes through before offset, noise and
+        quantization above (``controller.capacitive``); None (default): the pad force itself.
     """
 
     pitch: float = 3.0
@@ -150,6 +161,8 @@ class SensorArray:
     offset: float = 0.0
     quantization_step: float = 0.0
     sample_rate_hz: float = 100.0
+    fill_factor: float = 1.0
+    node: CapacitiveNode | None = None
 
     def __post_init__(self):
         check_positive("pitch", self.pitch, "mm")
@@ -164,6 +177,9 @@ class SensorArray:
         check_range("offset", self.offset, -math.inf, math.inf, "N")
         check_range("quantization_step", self.quantization_step, 0.0, math.inf, "N")
         check_positive("sample_rate_hz", self.sample_rate_hz, "Hz")
+        check_range("fill_factor", self.fill_factor, 0.0, 1.0, "", low_open=True)
+        if self.node is not None and not isinstance(self.node, CapacitiveNode):
+            raise ValueError(f"node={self.node!r} must be a CapacitiveNode or None")
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -174,6 +190,21 @@ class SensorArray:
     def cell_area(self) -> float:
         """Area of one cell, pitch^2 [mm^2]; reading / cell_area is the mean pressure on the cell [MPa]."""
         return self.pitch**2
+
+    @property
+    def pad_side(self) -> float:
+        """Side of a node's square pad, pitch sqrt(fill_factor) [mm]."""
+        return self.pitch * math.sqrt(self.fill_factor)
+
+    @property
+    def pad_area(self) -> float:
+        """Area of a node's pad, fill_factor pitch^2 [mm^2]."""
+        return self.fill_factor * self.pitch**2
+
+    @property
+    def pad_gap(self) -> float:
+        """Gap between neighbouring pads, pitch - pad_side [mm]."""
+        return self.pitch - self.pad_side
 
     @property
     def node_x(self) -> np.ndarray:
@@ -234,7 +265,9 @@ def _polygon_area_centroid(polygons: np.ndarray, counts: np.ndarray):
 
 
 def cell_force_operator(positions, triangles, array: SensorArray) -> sp.csr_matrix:
-    """Sparse operator W (ny * nx, n) mapping nodal pressure [MPa] to cell forces [N]: F = W p, exactly.
+    """Sparse operator W (ny * nx, n) mapping nodal pressure [MPa] to pad forces [N]: F = W p, exactly.
+
+    A node's pad is the centred square of side ``array.pad_side`` in its cell (the whole cell at fill_factor 1).
 
     Each triangle is clipped against every cell its bounding box touches (pairs, no loop over elements); on a
     clipped piece of area A and centroid g the linear field integrates to A p(g) = A sum_k lambda_k(g) p_k, with
@@ -261,7 +294,8 @@ def cell_force_operator(positions, triangles, array: SensorArray) -> sp.csr_matr
     origin = np.stack([left + cell_i * array.pitch, bottom + cell_j * array.pitch], axis=1)   # (P, 2)
     vertices = corners[triangle] - origin[:, None, :]                                        # (P, 3, 2) cell-local
     polygons, counts = vertices, np.full(len(triangle), 3)
-    zero, pitch = np.zeros(len(triangle)), np.full(len(triangle), float(array.pitch))
+    margin = 0.5 * array.pad_gap if array.fill_factor < 1.0 else 0.0          # pad edges in cell coordinates
+    zero, pitch = np.full(len(triangle), margin), np.full(len(triangle), float(array.pitch) - margin)
     for axis, bound, keep_below in ((0, zero, False), (0, pitch, True), (1, zero, False), (1, pitch, True)):
         polygons, counts = _clip_half_plane(polygons, counts, axis, bound, keep_below)
     area, centroid = _polygon_area_centroid(polygons, counts)                                # (P,), (P, 2)
@@ -280,18 +314,19 @@ def cell_force_operator(positions, triangles, array: SensorArray) -> sp.csr_matr
 
 
 def sample(field: PressureField, array: SensorArray, rng=None, operator=None) -> np.ndarray:
-    """Sensor readings (t, ny, nx) [N] of ``field``: cell forces, then offset, Gaussian noise and quantization.
+    """Sensor readings (t, ny, nx) [N] of ``field``: pad forces, the node model, then offset, noise and quantization.
 
-    reading = Q(F_cell + offset + noise), noise ~ N(0, noise_std^2) independent per node and frame, Q rounding to
-    the nearest multiple of ``quantization_step`` (none when 0). Force outside the footprint is not seen. Divide
-    by ``array.cell_area`` for the mean cell pressure [MPa].
+    reading = Q(N(F_pad) + offset + noise), F_pad the force on each node's pad (its whole cell at fill_factor 1),
+    N the capacitive node model (``array.node``; identity when None), noise ~ N(0, noise_std^2) independent per
+    node and frame, Q rounding to the nearest multiple of ``quantization_step`` (none when 0). Force outside the
+    pads is not seen. Divide by ``array.pad_area`` for the mean pad pressure [MPa].
 
     Parameters
     ----------
     field : PressureField -- pressure on the sensor plane, one frame or (t, n).
     array : SensorArray -- geometry and read-out chain.
-    rng : numpy Generator or int seed or None -- noise source (used only when noise_std > 0); seed it for
-        reproducible noise, None draws fresh entropy.
+    rng : numpy Generator or int seed or None -- noise source (used only when noise_std > 0 or the node model has
+        a noise floor); seed it for reproducible noise, None draws fresh entropy.
     operator : sparse (ny * nx, n), optional -- ``cell_force_operator`` of this geometry, to skip rebuilding it.
     """
     if operator is None:
@@ -299,12 +334,26 @@ def sample(field: PressureField, array: SensorArray, rng=None, operator=None) ->
     elif operator.shape != (array.shape[0] * array.shape[1], len(field.positions)):
         raise ValueError(f"operator shape {operator.shape} does not match the array and field "
                          f"({array.shape[0] * array.shape[1]}, {len(field.positions)})")
-    readings = (operator @ field.frames.T).T.reshape((-1,) + array.shape) + array.offset     # (t, ny, nx)
+    readings = (operator @ field.frames.T).T.reshape((-1,) + array.shape)                    # (t, ny, nx)
+    rng = np.random.default_rng(rng) if (array.noise_std > 0.0 or array.node is not None) else rng
+    if array.node is not None:
+        readings = array.node.read(readings, array.pad_area, rng)
+    readings = readings + array.offset
     if array.noise_std > 0.0:
-        readings = readings + np.random.default_rng(rng).normal(0.0, array.noise_std, readings.shape)
+        readings = readings + rng.normal(0.0, array.noise_std, readings.shape)
     if array.quantization_step > 0.0:
         readings = np.round(readings / array.quantization_step) * array.quantization_step
     return readings
+
+
+def capacitive_array(pitch: float = 3.0, node_counts: tuple[int, int] = (11, 13), centre=(0.0, 0.0),
+                     pad_gap: float = 0.5, node: CapacitiveNode | None = None, **options) -> SensorArray:
+    """A capacitive array: square pads with ``pad_gap`` [mm] between them (fill (1 - gap / pitch)^2) read through
+    ``node`` (default ``CapacitiveNode()``, the documented node of ``controller.capacitive``); ``options`` are the
+    other SensorArray fields. A 0.5 mm gap leaves 69 % of a 3 mm cell and 25 % of a 1 mm cell to the pad."""
+    check_range("pad_gap", pad_gap, 0.0, pitch, "mm (at most the pitch)", high_open=True)
+    return SensorArray(pitch=pitch, node_counts=node_counts, centre=centre, fill_factor=(1.0 - pad_gap / pitch) ** 2,
+                       node=CapacitiveNode() if node is None else node, **options)
 
 
 class Interpolation(Enum):

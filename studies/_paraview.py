@@ -52,7 +52,9 @@ def _field_data_legend() -> str:
 def write_vtu(result, out_dir: Path) -> list[Path]:
     """One VTU per increment, ``increment_NNN.vtu``: displacement [mm], contact_state (codes in STATE_NAMES and in
     the file's field data), contact_pressure [MPa] and tangential_traction [MPa] on the top points, nodal values on
-    the mesh vertices. A half model (y >= 0) is mirrored to the whole gel (u_y and t_y change sign)."""
+    the mesh vertices. A half model (y >= 0) is mirrored to the whole gel (u_y and t_y change sign). For an array,
+    the bump of each candidate point (-1 elsewhere; a mirrored point keeps the index of its computed bump) and its
+    bump's normal force [N], stick ratio and margin to gross slip painted on it (contact.bumps)."""
     import meshio
 
     model = result.model
@@ -83,6 +85,9 @@ def write_vtu(result, out_dir: Path) -> list[Path]:
         displacement = increment.displacement_full[vertex_dofs]
         point_data = {"displacement": displacement[source] * flip_y, "contact_state": state[source],
                       "contact_pressure": pressure[source], "tangential_traction": traction[source] * flip_y}
+        if increment.bumps is not None:
+            point_data.update({key: values[source] for key, values in _bump_fields(result, increment, n_vertices,
+                                                                                  candidate_vertex, on_vertex).items()})
         path = Path(out_dir) / f"increment_{number:03d}.vtu"
         with atomic_path(path) as temporary:
             meshio.write(temporary, meshio.Mesh(nodes, [("tetra", tets)], point_data=point_data), file_format="vtu")
@@ -90,6 +95,19 @@ def write_vtu(result, out_dir: Path) -> list[Path]:
             temporary.write_text(text.replace("<UnstructuredGrid>\n", "<UnstructuredGrid>\n" + legend, 1))
         paths.append(path)
     return paths
+
+
+def _bump_fields(result, increment, n_vertices, candidate_vertex, on_vertex) -> dict:
+    """Per-vertex bump index and the bump's normal force, stick ratio and gross-slip margin (0 off the bumps)."""
+    bump_of_candidate = result.candidate_bump[on_vertex]
+    bump = np.full(n_vertices, -1.0)
+    bump[candidate_vertex[on_vertex]] = bump_of_candidate
+    fields = {"bump": bump}
+    for name in ("normal_force", "stick_ratio", "gross_slip_margin"):
+        painted = np.zeros(n_vertices)
+        painted[candidate_vertex[on_vertex]] = getattr(increment.bumps, name)[bump_of_candidate]
+        fields[f"bump_{name}"] = painted
+    return fields
 
 
 def write_pvd(vtu_paths: list[Path], out_dir: Path) -> Path:

@@ -23,17 +23,13 @@ import math
 import os
 import socket
 import time
-from contextlib import contextmanager
 from pathlib import Path
 
+from fem.task_runner import LOCAL, SYNCHRONOUS, check_scheduler, connect
 from studies._output import write_json_atomic
 
 __all__ = ["solve_group", "iter_group", "plan_tasks", "check_scheduler", "connect", "LOCAL", "SYNCHRONOUS",
            "failed_record"]
-
-LOCAL = "local"                # a LocalCluster of worker processes on this machine
-SYNCHRONOUS = "synchronous"    # no dask: the tasks run one after another in this process
-ADDRESS_SCHEMES = ("tcp://", "tls://", "ucx://", "inproc://", "ws://", "wss://")
 
 
 def _worker_name() -> str:
@@ -125,7 +121,7 @@ def iter_group(items: list[tuple[str, dict, dict]], cases_dir: str | None, group
 
 
 def solve_group(items: list[tuple[str, dict, dict]], cases_dir: str | None, group: str = "") -> list[dict]:
-    """Dask task: ``iter_group`` run to the end; the records of the group, in order."""
+    """``iter_group`` run to the end; the records of the group, in order."""
     return list(iter_group(items, cases_dir, group))
 
 
@@ -145,44 +141,3 @@ def plan_tasks(cases, n_workers: int, share_prepare: bool = True) -> list[list]:
         half = (len(largest) + 1) // 2
         tasks = sorted(tasks + [largest[:half], largest[half:]], key=len, reverse=True)
     return tasks
-
-
-def check_scheduler(scheduler: str) -> str:
-    """Return ``scheduler`` if it is "local", "synchronous" or an address with a dask scheme, else raise."""
-    if scheduler not in (LOCAL, SYNCHRONOUS) and not str(scheduler).startswith(ADDRESS_SCHEMES):
-        raise ValueError(f"scheduler={scheduler!r} is not {LOCAL!r}, {SYNCHRONOUS!r} or an address like "
-                         f"'tcp://host:8786'")
-    return scheduler
-
-
-@contextmanager
-def connect(scheduler: str = LOCAL, workers: int = 2, timeout: float = 5.0):
-    """Yield a dask.distributed Client (None for "synchronous").
-
-    ``scheduler``: "local" starts a LocalCluster of ``workers`` processes with one thread each (dask sets
-    OMP/MKL/OpenBLAS threads to 1 in each); an address such as "tcp://host:8786" connects to a running scheduler
-    within ``timeout`` seconds, else raises ConnectionError naming the address.
-    """
-    check_scheduler(scheduler)
-    if scheduler == SYNCHRONOUS:
-        yield None
-        return
-    try:
-        from distributed import Client, LocalCluster
-    except ImportError as error:
-        raise ImportError(f"the sweep needs dask.distributed ({error}): pip install 'fingertip-contact[sweep]', or "
-                          f"run with --scheduler {SYNCHRONOUS}") from None
-    if scheduler == LOCAL:
-        if not (isinstance(workers, int) and workers >= 1):
-            raise ValueError(f"workers={workers!r} must be an integer >= 1")
-        with LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None) as cluster, \
-                Client(cluster) as client:
-            yield client
-        return
-    try:
-        client = Client(scheduler, timeout=timeout)
-    except (OSError, TimeoutError) as error:
-        raise ConnectionError(f"cannot reach the dask scheduler at {scheduler!r} within {timeout:g} s ({error}); "
-                              f"is it running? (dask scheduler --port ...)") from None
-    with client:
-        yield client

@@ -25,7 +25,6 @@ from __future__ import annotations
 import copy
 import dataclasses
 import hashlib
-import itertools
 import json
 import math
 from dataclasses import dataclass, field
@@ -308,18 +307,13 @@ def _expand_outputs(parsed, cases: list[Case]) -> tuple[Output, ...]:
     return tuple(outputs)
 
 
-def _points(grid, zipped) -> list[tuple[tuple[str, object], ...]]:
-    grid_points = list(itertools.product(*[[(key, v) for v in values] for key, values in grid]))
-    zip_points = list(zip(*[[(key, v) for v in values] for key, values in zipped])) or [()]
-    return [tuple(g) + tuple(z) for g in grid_points for z in zip_points]
-
-
 def _build_cases(base: dict, grid, zipped) -> list[Case]:
     """Every case's scene, built and checked; all bad cases reported at once (the first MAX_CASE_PROBLEMS in full)."""
     from contact.scene import scene_from_dict
+    from fem.task_runner import axis_points
 
     cases, seen, problems, bad_cases = [], {}, [], 0
-    for parameters in _points(grid, zipped):
+    for parameters in axis_points(grid, zipped):
         document = copy.deepcopy(base)
         try:
             for key, value in parameters:

@@ -4,6 +4,13 @@ Reports medians over repeats of: mesh, assembly, factorization, compliance colum
 plain linear solve (assembly + factorization + one back-substitution), their ratio (target <= 3) and the peak
 memory of the process. Timings are never asserted in tests: the machines are shared and noisy.
 
+``--scaling`` times HCM-1 from 20k to 229k DOF (h = 0.2 ... 0.05 mm) against its limit, the cost of what no contact
+solver on this mesh can avoid: mesh + assembly + one factorization + one back-substitution per contact unknown (3 per
+point in contact at any converged increment). A back-substitution costs what one compliance column cost in the same
+solve (the columns' time over their number: on a shared machine a separate timing lands under another load; it is
+kept beside, ``back_substitution_separate``, a 256-column block solved after the path). total / limit <=
+SCALING_TARGET at every size is the target (benchmark_scaling.csv / .json).
+
 ``--factorizations`` compares instead, on the stability study's nu = 0.4999 half block (h = 0.15 mm; 0.3 mm with
 ``--quick``), the three ways of factorizing the gel: standard P1 K, the nodal-average condensed K, and the
 nodal-average saddle-point system the solver uses (``contact.solver.factorize_stiffness``): nonzeros of the matrix
@@ -26,23 +33,30 @@ from studies._output import write_csv_atomic, write_json_atomic
 NAME = "benchmark"
 SCENE = Path(__file__).parent / "scenes" / "hcm1.toml"
 TARGET_RATIO = 3.0
+SCALING_SIZES = (0.2, 0.14, 0.1, 0.07, 0.05)     # mm: 20k, 31k, 53k, 99k, 229k DOF
+SCALING_TARGET = 1.3
 RIGHT_HAND_SIDES = 256       # unit right-hand sides per timed multi-RHS solve (one chunk of the compliance columns)
 
 
 def add_arguments(parser) -> None:
     parser.add_argument("--repeats", type=int, default=3, help="solves per setting; medians are reported")
+    parser.add_argument("--scaling", action="store_true",
+                        help="HCM-1 from 20k to 229k DOF: whole solve against mesh + assembly + factorization + one "
+                             "back-substitution per contact unknown")
     parser.add_argument("--factorizations", action="store_true",
                         help="compare the factorizations of standard P1, nodal-average K and its saddle-point "
                              "system on the stability block instead of timing HCM-1")
 
 
-def run(out_dir, quick: bool = False, repeats: int = 3, factorizations: bool = False) -> dict:
+def run(out_dir, quick: bool = False, repeats: int = 3, factorizations: bool = False, scaling: bool = False) -> dict:
     """Time the HCM-1 path; write benchmark.csv (one row per repeat) and benchmark.json (medians)."""
     from contact.scene import load_scene
     from contact.solver import solve_scene
 
     if repeats < 1:
         raise ValueError(f"repeats={repeats!r} must be >= 1")
+    if scaling:
+        return cost_scaling(out_dir, quick)
     if factorizations:
         return compare_factorizations(out_dir, quick, 1 if quick else repeats)
     scene = load_scene(SCENE)
@@ -52,7 +66,7 @@ def run(out_dir, quick: bool = False, repeats: int = 3, factorizations: bool = F
     rows = []
     for repeat in range(repeats):
         start = time.perf_counter()
-        result = solve_scene(scene)
+        result = solve_scene(scene, cache_compliance=False)    # every repeat solves its columns
         wall = time.perf_counter() - start
         t = result.timings
         rows.append(dict(repeat=repeat, size_contact=scene.mesh.size_contact, dofs=result.mesh_info["dofs"],
@@ -159,3 +173,59 @@ def compare_factorizations(out_dir, quick: bool = False, repeats: int = 3) -> di
     print(f"  saddle point vs condensed K: largest difference {difference:.1e} of the largest compliance entry")
     write_json_atomic(Path(out_dir) / f"{NAME}_factorizations.json", summary)
     return summary
+
+
+def cost_scaling(out_dir, quick: bool = False) -> dict:
+    """HCM-1 at SCALING_SIZES, each solved once with a cold compliance (no disk cache): total wall time against the
+    limit (module docstring), with the overheads split: columns beyond the contact unknowns, dense Newton systems,
+    the rest (post-processing, Python). Writes benchmark_scaling.csv / .json."""
+    from tqdm import tqdm
+
+    from contact._newton import OPEN
+    from contact.scene import load_scene
+    from contact.solver import prepare, solve_scene
+
+    scene = load_scene(SCENE)
+    rows = []
+    for size in tqdm((0.3, 0.25) if quick else SCALING_SIZES, desc=f"{NAME} scaling", unit="mesh"):
+        case = dataclasses.replace(scene, mesh=dataclasses.replace(scene.mesh, size_contact=size))
+        start = time.perf_counter()
+        prepared = prepare(case)
+        result = solve_scene(case, prepared, cache_compliance=False)
+        total = time.perf_counter() - start
+        touched = np.zeros(result.candidates.size, dtype=bool)
+        for increment in result.increments:
+            touched |= increment.status != OPEN
+        unknowns = 3 * int(touched.sum())
+        rhs = np.asfortranarray(_unit_right_hand_sides(prepared.model, RIGHT_HAND_SIDES))
+        solve_start = time.perf_counter()
+        prepared.factorization.solve(rhs)
+        separate = (time.perf_counter() - solve_start) / rhs.shape[1]
+        prepared.factorization.release()
+        t = result.timings
+        per_column = t["compliance_seconds"] / t["compliance_columns"]
+        limit = t["mesh"] + t["assembly"] + t["factorization"] + unknowns * per_column
+        rows.append(dict(size_contact=size, dofs=result.mesh_info["dofs"], total=total, limit=limit,
+                         ratio=total / limit, mesh=t["mesh"], assembly=t["assembly"],
+                         factorization=t["factorization"], contact_unknowns=unknowns,
+                         back_substitution_per_column=per_column, back_substitution_separate=separate,
+                         columns_computed=t["compliance_columns"],
+                         column_seconds=t["compliance_seconds"], newton_linear_seconds=t["newton_linear_seconds"],
+                         newton_factorizations=t["newton_factorizations"],
+                         newton_krylov_iterations=t["newton_krylov_iterations"],
+                         newton_iterations=sum(inc.iterations for inc in result.increments),
+                         other_seconds=total - limit - (t["compliance_seconds"] - unknowns * per_column)
+                         - t["newton_linear_seconds"]))
+        write_csv_atomic(Path(out_dir) / f"{NAME}_scaling.csv", rows)
+    worst = max(row["ratio"] for row in rows)
+    summary = {"rows": rows, "target": SCALING_TARGET, "worst_ratio": worst, "meets_target": worst <= SCALING_TARGET}
+    write_json_atomic(Path(out_dir) / f"{NAME}_scaling.json", summary)
+    print(f"{NAME}: HCM-1 total / limit (mesh + assembly + factorization + one back-substitution per contact unknown), "
+          f"target <= {SCALING_TARGET}")
+    print(f"  {'h [mm]':>7s} {'DOF':>8s} {'total':>8s} {'limit':>8s} {'ratio':>6s} {'columns':>8s} {'unknowns':>8s} "
+          f"{'newton':>8s} {'LU':>4s}")
+    for row in rows:
+        print(f"  {row['size_contact']:7.3f} {row['dofs']:8d} {row['total']:7.1f}s {row['limit']:7.1f}s "
+              f"{row['ratio']:6.2f} {row['columns_computed']:8d} {row['contact_unknowns']:8d} "
+              f"{row['newton_linear_seconds']:7.1f}s {row['newton_factorizations']:4d}")
+    return {"max_error": None, "worst_ratio": worst}

@@ -19,6 +19,8 @@ NAME = "fig3"
 SURFACE_RATIOS = (0.0, 0.25, 0.5, 0.75, 0.9)
 CONTACT_RADIUS = 2.0          # mm, target a
 EDGE_RADIUS = 20.0            # mm, arc radius R of the curved part
+E, NU = 1.0, 0.45             # MPa, -: urethane-like gel; beta/mu = 0.18 and the press is frictionless
+#                               (docs/theory.md, sec. 8.3); stick ratios do not depend on E
 
 
 def _gel(b_over_a: float):
@@ -35,7 +37,7 @@ def run(out_dir, quick: bool = False) -> dict:
 
     from contact.solver import solve_scene
     from contact.theory import flat_curved, stick_ratio_profile
-    from studies._fem_shear import E, NU, plate_shear_scene
+    from controller.bench import plate_shear_scene
 
     out_dir = Path(out_dir)
     size = 0.4 if quick else 0.2                          # mm: a/5 quick, a/10 default
@@ -48,7 +50,7 @@ def run(out_dir, quick: bool = False) -> dict:
         profile = flat_curved(b_over_a, contact_radius=CONTACT_RADIUS, curvature_radius=EDGE_RADIUS)
         normal_force = e_star * float(profile.force_per_modulus(CONTACT_RADIUS))
         scene = plate_shear_scene(f"fig3_b{b_over_a}", _gel(b_over_a), normal_force, ratios, size,
-                                  fine_radius=1.3 * CONTACT_RADIUS + 2 * size)
+                                  fine_radius=1.3 * CONTACT_RADIUS + 2 * size, youngs_modulus=E, poissons_ratio=NU)
         case_start = time.perf_counter()
         result = solve_scene(scene)
         seconds = time.perf_counter() - case_start

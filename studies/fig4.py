@@ -34,7 +34,7 @@ def run(out_dir, quick: bool = False) -> dict:
     """Shear both gels by force control up to Q/(mu P) = 0.99; write fig4.csv, .png, .pdf."""
     from contact.solver import solve_scene
     from contact.theory import stick_ratio_translational
-    from studies._fem_shear import plate_shear_scene
+    from controller.bench import plate_shear_scene
 
     out_dir = Path(out_dir)
     ratios = (0.3, 0.5, 0.7, 0.95) if quick else (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 0.98, 0.99)
@@ -63,7 +63,7 @@ def _plot(rows, results, ratios, wall):
     import matplotlib.pyplot as plt
 
     from contact.theory import stick_ratio_translational
-    from studies._fem_shear import state_legend, state_map
+    from contact.plotting import state_legend, state_map
 
     fig = plt.figure(figsize=(13, 7.2))
     grid = fig.add_gridspec(2, 4, width_ratios=[1.6, 1, 1, 1], hspace=0.3, wspace=0.15)

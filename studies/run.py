@@ -38,8 +38,19 @@ def result_document(result, error: str | None = None) -> dict:
         "timings": dict(result.timings),
         "left_out": result.left_out,
         "error": error or result.error,
-        "increments": [increment.summary() for increment in result.increments],
+        "increments": [_with_bumps(increment.summary(), increment, result) for increment in result.increments],
     }
+
+
+def _has_bumps(result) -> bool:
+    """Per-bump columns are written for scenes with more than one contact (bump arrays under a plate)."""
+    return result.bump_centers is not None and len(result.bump_centers) > 1
+
+
+def _with_bumps(summary: dict, increment, result) -> dict:
+    if _has_bumps(result) and increment.bumps is not None:
+        summary["bumps"] = increment.bumps.rows()
+    return summary
 
 
 def step_rows(result) -> list[dict]:
@@ -52,6 +63,8 @@ def step_rows(result) -> list[dict]:
                 row[f"{key}_x"], row[f"{key}_y"] = value
             else:
                 row[key] = value
+        if _has_bumps(result) and increment.bumps is not None:
+            row.update(increment.bumps.flat())
         rows.append(row)
     return rows
 

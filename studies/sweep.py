@@ -18,36 +18,34 @@ from fem.atomic import remove_stale_temporaries
 from studies._output import save_figure, write_json_atomic
 
 NAME = "sweep"
-POLL_SECONDS = 0.5          # how often the client looks for case records written by running tasks
 
 
-def add_arguments(parser) -> None:
-    parser.add_argument("sweep_file", type=Path, help="sweep TOML file (see studies/sweeps/)")
+def add_runner_arguments(parser) -> None:
+    """Options of a resumable run on dask (fem.task_runner): --scheduler, --workers, --connect-timeout,
+    --retry-failed, --quiet; shared by the scene sweep and the design sweep."""
     parser.add_argument("--scheduler", default="local",
                         help="'local' (a LocalCluster, default), 'synchronous' (no dask, in this process) or the "
                              "address of a running scheduler, e.g. tcp://host:8786 (workers must share DIR)")
     parser.add_argument("--workers", type=int, default=2, help="worker processes of the LocalCluster (default 2)")
     parser.add_argument("--connect-timeout", type=float, default=5.0, help="seconds to reach --scheduler (default 5)")
     parser.add_argument("--retry-failed", action="store_true", help="run the cases recorded as failed again")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("sweep_file", type=Path, help="sweep TOML file (see studies/sweeps/)")
+    add_runner_arguments(parser)
     parser.add_argument("--no-share", action="store_true",
                         help="one task per case, each preparing its own mesh (to measure what sharing saves)")
-    parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
 RECORD_KEYS = ("case_id", "status", "increments")
 
 
 def _read_record(path: Path) -> dict | None:
-    """The case record in ``path``, or None when absent, unreadable or not a record of this case (e.g. ``{}``):
-    the case then runs again."""
-    try:
-        record = json.loads(path.read_text())
-    except (OSError, ValueError):
-        return None
-    if not isinstance(record, dict) or any(key not in record for key in RECORD_KEYS) \
-            or record["case_id"] != path.stem or record["status"] not in ("ok", "failed"):
-        return None
-    return record
+    from fem.task_runner import read_record
+
+    return read_record(path, RECORD_KEYS)      # absent, unreadable or not this case's record: the case runs again
 
 
 def _identity(spec) -> dict:
@@ -72,44 +70,14 @@ def check_out_dir(out_dir: Path, spec) -> None:
     check_writable(out_dir)
 
 
-def _run_pending(tasks, client, cases_dir: Path, on_record) -> None:
-    """Run the tasks (lists of cases) and call ``on_record(case, record)`` once per case as it finishes."""
-    from studies._sweep_exec import failed_record, iter_group, solve_group
+def _payload(case) -> tuple:
+    return case.case_id, dict(case.parameters), case.document
 
-    def payload(task):
-        return [(case.case_id, dict(case.parameters), case.document) for case in task]
 
-    if client is None:
-        for number, task in enumerate(tasks):
-            for case, record in zip(task, iter_group(payload(task), str(cases_dir), f"g{number}")):
-                on_record(case, record)
-        return
-    from distributed import wait
+def _crashed(case, message: str) -> dict:
+    from studies._sweep_exec import failed_record
 
-    futures = {client.submit(solve_group, payload(task), str(cases_dir), f"g{number}", pure=False): task
-               for number, task in enumerate(tasks)}
-    waiting = {case.case_id: case for task in tasks for case in task}
-    pending = set(futures)
-    while pending:
-        try:
-            done = wait(pending, timeout=POLL_SECONDS, return_when="FIRST_COMPLETED").done
-        except TimeoutError:
-            done = set()
-        for case_id in list(waiting):     # records written by running tasks (shared filesystem)
-            record = _read_record(cases_dir / f"{case_id}.json")
-            if record is not None:
-                on_record(waiting.pop(case_id), record)
-        for future in done:
-            pending.discard(future)
-            try:
-                records = future.result()
-            except Exception as error:    # the task itself died (worker lost, out of memory): record its cases
-                records = [failed_record(c.case_id, dict(c.parameters), f"task failed: {type(error).__name__}: "
-                                                                         f"{error}") for c in futures[future]]
-            for record in records:
-                if record["case_id"] in waiting:
-                    write_json_atomic(cases_dir / f"{record['case_id']}.json", record)
-                    on_record(waiting.pop(record["case_id"]), record)
+    return failed_record(case.case_id, dict(case.parameters), message)
 
 
 def run(out_dir, quick: bool = False, sweep_file: Path | None = None, scheduler: str = "local", workers: int = 2,
@@ -117,7 +85,8 @@ def run(out_dir, quick: bool = False, sweep_file: Path | None = None, scheduler:
     """Run (or resume) the sweep; returns counts of cases (total, ran, skipped, ok, failed) and the wall time."""
     from tqdm import tqdm
 
-    from studies._sweep_exec import check_scheduler, connect, plan_tasks
+    from fem.task_runner import check_scheduler, connect, run_tasks, set_aside, stored_records
+    from studies._sweep_exec import iter_group, plan_tasks
     from studies._sweep_spec import code_version, load_sweep
     from studies._sweep_table import case_row, plot_sweep, write_table
 
@@ -137,11 +106,7 @@ def run(out_dir, quick: bool = False, sweep_file: Path | None = None, scheduler:
         "name": spec.name, "source": spec.source, "grid": dict(spec.grid), "list": dict(spec.zipped),
         "outputs": [o.text for o in spec.outputs], "cases": len(spec.cases), "base_scene": spec.base_document,
         "version": code_version()})
-    records = {}
-    for case in spec.cases:
-        record = _read_record(cases_dir / f"{case.case_id}.json")
-        if record is not None and (record["status"] == "ok" or not retry_failed):
-            records[case.case_id] = record
+    records = stored_records(spec.cases, cases_dir, retry_failed, RECORD_KEYS)
     pending = [case for case in spec.cases if case.case_id not in records]
     skipped = len(spec.cases) - len(pending)
 
@@ -158,16 +123,13 @@ def run(out_dir, quick: bool = False, sweep_file: Path | None = None, scheduler:
         if record["status"] != "ok":
             bar.write(f"{NAME}: case {dict(case.parameters)} failed: {record['error'][:300]}")
 
-    for case in pending:                  # a failed record being retried: keep it beside, out of the poller's way
-        stale = cases_dir / f"{case.case_id}.json"
-        if stale.exists():
-            stale.replace(stale.with_suffix(".json.previous"))
+    set_aside(pending, cases_dir)         # a failed record being retried: keep it beside, out of the poller's way
     tasks = []
     if pending:
         with connect(scheduler, workers, connect_timeout) as client:
             slots = sum(client.nthreads().values()) if client is not None else 1     # task slots
             tasks = plan_tasks(pending, slots, share_prepare=not no_share)
-            _run_pending(tasks, client, cases_dir, on_record)
+            run_tasks(tasks, iter_group, _payload, _crashed, cases_dir, on_record, client)
     bar.close()
     rows = table_rows()
     write_table(rows, out_dir, NAME)

@@ -20,15 +20,27 @@ def test_sensor_conserves_the_fem_base_force():
 def test_fig6_quick(tmp_path):
     from studies import fig6
 
-    fig6.run(tmp_path, quick=True)
+    summary = fig6.run(tmp_path, quick=True)
     with open(tmp_path / "fig6.csv") as stream:
         rows = list(csv.DictReader(stream))
-    assert {(r["case"], float(r["sensor_pitch"])) for r in rows} == {("1x1", 1.0), ("1x1", 3.0), ("3x3", 1.0),
-                                                                      ("3x3", 3.0)}
+    assert {(r["case"], r["sensor"], float(r["sensor_pitch"])) for r in rows} == {
+        (case, sensor, pitch) for case in ("1x1", "3x3") for sensor in fig6.SENSORS for pitch in (1.0, 3.0)}
     for row in rows:
-        # the calibrated gain maps the base CoP shift onto the plate shift: a good fit, a finite error
-        assert float(row["calibration_r_squared"]) > 0.9
-        assert 0.0 <= float(row["error_percent"]) < 50.0
+        before, after = float(row["error_before_percent"]), float(row["error_after_percent"])
+        assert 0.0 <= after < 100.0 and before >= 0.0
+        if (row["sensor"], float(row["sensor_pitch"])) == ("cells", 1.0):
+            assert before == pytest.approx(after, rel=1e-12)       # the reference sensor sets the design gain
+        if row["sensor"] != "capacitive":
+            # noise-free sensors: the calibrated gain maps the base CoP shift onto the plate shift, a good fit; pads
+            # and cells sample the same ~10 mm base-pressure kernel, so their gains differ only by the sampling of
+            # that kernel at 3 mm (measured within 11 % of the 1 mm cells' gain; 15 % allowed)
+            assert float(row["calibration_r_squared"]) > 0.9
+            assert float(row["gain"]) == pytest.approx(float(row["design_gain"]), rel=0.15)
+    fills = {(r["sensor"], float(r["sensor_pitch"])): float(r["fill_factor"]) for r in rows}
+    assert fills[("cells", 3.0)] == 1.0 and fills[("small pads", 1.0)] == pytest.approx(1 / 9)
+    assert fills[("capacitive", 1.0)] == pytest.approx(0.25) and fills[("capacitive", 3.0)] == pytest.approx(
+        (2.5 / 3.0) ** 2)
+    assert any("paper's claims" in line for line in summary["verdict"])
 
 
 def test_fig9_quick_recovers_translation_and_rotation(tmp_path):

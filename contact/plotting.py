@@ -1,25 +1,10 @@
-"""Shared pieces of the FEM shear studies (Figs. 3 and 4): a rigid plate pressed on a gel, then sheared along x."""
+"""Plots of a contact result: the top view of the contact state (open / stick / slip) on the gel's upper surface."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from contact.scene import BodySpec, ContactSpec, GelSpec, Load, LoadKind, Material, MeshSettings, Scene
-
-MU = 0.5
-NU = 0.45            # urethane-like gel; beta/mu = 0.18 and the press is frictionless (docs/theory.md, sec. 8.3)
-E = 1.0              # MPa; stick ratios do not depend on E
-
-
-def plate_shear_scene(name: str, gel: GelSpec, normal_force: float, load_ratios, size_contact: float,
-                      size_far: float = 3.0, fine_radius: float | None = None) -> Scene:
-    """A rigid plate pressed on the gel with ``normal_force`` [N] (frictionless), then sheared along +x by force
-    control to Q/(mu P) = each of ``load_ratios``."""
-    return Scene(name=name, gel=gel, material=Material(E, NU), body=BodySpec("plane"),
-                 contact=ContactSpec(friction_coefficient=MU, frictionless_press=True),
-                 mesh=MeshSettings(size_contact=size_contact, size_far=size_far, fine_radius=fine_radius),
-                 loads=(Load(LoadKind.PRESS, "force", (normal_force,)),
-                        Load(LoadKind.SHEAR, "force", tuple(float(r * MU * normal_force) for r in load_ratios))))
+__all__ = ["state_map", "state_legend"]
 
 
 def state_map(axis, result, increment, title: str, half_width: float | None = None) -> None:

@@ -1,0 +1,138 @@
+"""Per-bump results of a contact increment: each surface point belongs to the contact (bump) whose first-contact point
+is nearest, and the increment's forces, areas and states are summed per contact.
+
+A bump array under a rigid plate has one contact per bump; the array's totals (``Increment.normal_force``,
+``contact_radius`` = sqrt(total area / pi), ``stick_ratio``) mix them. Per bump: normal force P_i, tangential force
+Q_i, its share of the array torque T_i about the twist centre (sum T_i = T), its torque about its own first-contact
+point (the spin the bump's own friction carries), contact radius a_i = sqrt(A_i / pi), stick ratio
+c_i / a_i = sqrt(A_stick,i / A_i), point counts by state, and the margin to gross slip
+
+    m_i = 1 - sum_j |t_j| / (mu sum_j lambda_j)      over the bump's points j,
+
+the share of the bump's friction capacity left: 1 with no tangential load, 0 when every point of the bump is on the
+friction limit (the bump slides as a whole). Under pure shear it is 1 - |Q_i| / (mu P_i), the load-ratio margin of
+Cattaneo-Mindlin; under twist and combined loads it is the same measure of the bump's traction field.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from contact._newton import OPEN, SLIP, STICK
+
+__all__ = ["BumpResults", "BUMP_FIELDS", "assign_bumps", "bump_results"]
+
+ROUND_OFF = 1e-9     # |margin| below this is 0: sliding points sit on the cone to the Newton tolerance, not exactly
+
+# per-bump quantities written to result.json, steps.csv (as bump<i>_<name>) and the VTU; vectors get _x, _y
+BUMP_FIELDS = ("normal_force", "tangential_force", "torque", "spin_torque", "contact_area", "contact_radius",
+               "stick_ratio", "gross_slip_margin", "open_points", "stick_points", "slip_points")
+
+
+@dataclass(frozen=True, eq=False)
+class BumpResults:
+    """Per-bump scalars of one increment, k bumps (mm, N, N mm).
+
+    Attributes
+    ----------
+    centers : (k, 2) first-contact points of the bumps [mm].
+    normal_force : (k,) P_i [N]; sums to the increment's normal force.
+    tangential_force : (k, 2) Q_i [N]; sums to the increment's tangential force.
+    torque : (k,) T_i about the twist centre [N mm]; sums to the increment's torque.
+    spin_torque : (k,) torque of the bump's tractions about its own first-contact point [N mm].
+    contact_area, stick_area : (k,) [mm^2]; contact_radius = sqrt(contact_area / pi) [mm].
+    stick_ratio : (k,) sqrt(stick_area / contact_area) [-] (0 where the bump has no contact).
+    gross_slip_margin : (k,) 1 - sum |t| / (mu sum lambda) [-] (module docstring); 1 where the bump carries no
+        normal force, 0 with mu = 0.
+    open_points, stick_points, slip_points : (k,) counts of the bump's contact-candidate points by state.
+    """
+
+    centers: np.ndarray
+    normal_force: np.ndarray
+    tangential_force: np.ndarray
+    torque: np.ndarray
+    spin_torque: np.ndarray
+    contact_area: np.ndarray
+    stick_area: np.ndarray
+    contact_radius: np.ndarray
+    stick_ratio: np.ndarray
+    gross_slip_margin: np.ndarray
+    open_points: np.ndarray
+    stick_points: np.ndarray
+    slip_points: np.ndarray
+
+    @property
+    def count(self) -> int:
+        return len(self.normal_force)
+
+    def rows(self) -> list[dict]:
+        """One plain dict per bump (JSON-ready): index, centre and every field of BUMP_FIELDS."""
+        rows = []
+        for index in range(self.count):
+            row = {"bump": index, "center": [float(v) for v in self.centers[index]]}
+            for name in BUMP_FIELDS:
+                value = getattr(self, name)[index]
+                row[name] = [float(v) for v in value] if np.ndim(value) else (
+                    int(value) if name.endswith("_points") else float(value))
+            rows.append(row)
+        return rows
+
+    def flat(self) -> dict:
+        """bump<i>_<name> -> value for every bump and field (vectors as _x, _y), for one row of steps.csv."""
+        flat = {}
+        for row in self.rows():
+            for name in BUMP_FIELDS:
+                value = row[name]
+                if isinstance(value, list):
+                    flat[f"bump{row['bump']}_{name}_x"], flat[f"bump{row['bump']}_{name}_y"] = value
+                else:
+                    flat[f"bump{row['bump']}_{name}"] = value
+        return flat
+
+
+def assign_bumps(positions: np.ndarray, centers: np.ndarray) -> np.ndarray:
+    """Index (n,) of the nearest first-contact point (k, 2) [mm] to each point (n, 2+) in the plane."""
+    offsets = positions[:, None, :2] - np.asarray(centers, dtype=float)[None, :, :]          # (n, k, 2)
+    return np.argmin((offsets**2).sum(axis=2), axis=1)
+
+
+def bump_results(bump: np.ndarray, centers: np.ndarray, status: np.ndarray, normal_force: np.ndarray,
+                 tangential_force: np.ndarray, areas: np.ndarray, positions: np.ndarray, lever: np.ndarray,
+                 friction_coefficient: float, multiplicity: float = 1.0) -> BumpResults:
+    """Sum the point results of one increment per bump.
+
+    bump (n,) bump index of each candidate point; centers (k, 2) [mm]; status (n,) OPEN/STICK/SLIP; normal_force
+    (n,) [N]; tangential_force (n, 2) [N]; areas (n,) tributary areas [mm^2]; positions (n, 2+) [mm]; lever (n, 2)
+    twist lever arms about the twist centre [mm/rad]. ``multiplicity`` = 2 for a mirror half model: forces and
+    areas along x count twice, y-forces and torques cancel (as in ``contact.result.record_increment``).
+    """
+    count = len(centers)
+
+    def per_bump(values):
+        return np.bincount(bump, weights=values, minlength=count)
+
+    whole = multiplicity == 1.0
+    normal = multiplicity * per_bump(normal_force)
+    tangential = np.column_stack([multiplicity * per_bump(tangential_force[:, 0]),
+                                  per_bump(tangential_force[:, 1]) if whole else np.zeros(count)])
+    torque = per_bump((lever * tangential_force).sum(axis=1)) if whole else np.zeros(count)
+    arm = positions[:, :2] - np.asarray(centers, dtype=float)[bump]                        # (n, 2) [mm]
+    spin = per_bump(arm[:, 0] * tangential_force[:, 1] - arm[:, 1] * tangential_force[:, 0]) if whole \
+        else np.zeros(count)
+    contact_area = multiplicity * per_bump(np.where(status != OPEN, areas, 0.0))
+    stick_area = multiplicity * per_bump(np.where(status == STICK, areas, 0.0))
+    touching = contact_area > 0.0
+    capacity = friction_coefficient * per_bump(normal_force)
+    used = per_bump(np.linalg.norm(tangential_force, axis=1))
+    margin = np.where(capacity > 0.0, 1.0 - used / np.where(capacity > 0.0, capacity, 1.0),
+                      np.where(per_bump(normal_force) > 0.0, 0.0, 1.0))
+    counts = [np.bincount(bump[status == code], minlength=count) for code in (OPEN, STICK, SLIP)]
+    return BumpResults(
+        centers=np.asarray(centers, dtype=float), normal_force=normal, tangential_force=tangential, torque=torque,
+        spin_torque=spin, contact_area=contact_area, stick_area=stick_area,
+        contact_radius=np.sqrt(contact_area / np.pi),
+        stick_ratio=np.where(touching, np.sqrt(stick_area / np.where(touching, contact_area, 1.0)), 0.0),
+        gross_slip_margin=np.where(np.abs(margin) < ROUND_OFF, 0.0, margin), open_points=counts[0],
+        stick_points=counts[1], slip_points=counts[2])

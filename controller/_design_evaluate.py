@@ -1,0 +1,109 @@
+"""One task of a design sweep: designs sharing a FEM solution, solved once, each read by its own sensor."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import socket
+import time
+
+from ._design_metrics import capacity_metrics, drop_metrics, estimation_metrics, mesh_metrics
+from ._design_spec import DesignStudy, FingertipDesign, SensorModel, design_scenes, twist_angles
+
+__all__ = ["evaluate_designs", "design_record"]
+
+
+def design_record(case_id: str, design, status: str, error: str | None, metrics: dict, increments: list,
+                  timings: dict, group: str) -> dict:
+    """The JSON record of one design: its fields, status, error, metrics, increment rows, timings, worker."""
+    return {"case_id": case_id, "status": status, "error": error, "design": dataclasses.asdict(design),
+            "metrics": metrics, "increments": increments, "timings": timings, "group": group,
+            "worker": f"{socket.gethostname()}:{os.getpid()}"}
+
+
+def _increment_rows(result, path: str, ratios, estimates) -> list[dict]:
+    rows = []
+    for number, increment in enumerate(result.increments):
+        bumps = increment.bumps
+        row = {"path": path, "increment": number, "load_kind": increment.load_kind,
+               "load_ratio": (float(ratios[number - 1]) if number else 0.0) if path == "shear" else None,
+               "normal_force": increment.normal_force, "tangential_force": increment.tangential_force[0],
+               "torque": increment.torque, "shift": increment.shift[0], "angle": increment.angle,
+               "stick_ratio": increment.stick_ratio, "contact_area": increment.contact_area,
+               "least_bump_margin": float(bumps.gross_slip_margin.min()),
+               "least_bump_stick_ratio": float(bumps.stick_ratio.min()),
+               "estimated_shift": None, "estimated_angle": None}
+        if number and estimates is not None:
+            key = "estimated_shift" if path == "shear" else "estimated_angle"
+            row[key] = float(estimates[number - 1])
+        rows.append(row)
+    return rows
+
+
+def evaluate_designs(items: list[tuple[str, dict, dict]], cases_dir: str | None = None, group: str = ""):
+    """Evaluate designs that share one FEM solution (equal ``_fem_key``): yield one record per design, in order.
+
+    ``items``: (case_id, design fields, study document). The shear and twist paths are solved once (one prepare,
+    one set of compliance columns), then each design's sensor reads them. A failure keeps what was computed before
+    it (the metrics of the shear path when the twist path fails) and records the error. Writes each record to
+    ``cases_dir/<case_id>.json`` when given. This is the task ``design_sweep`` runs (``fem.task_runner``).
+    """
+    from contact.result import ContactUnderResolved, LoadNotCarried, PathNotCompleted
+    from contact.solver import prepare, solve_scene
+    from fem.task_runner import write_record
+
+    designs = [(case_id, FingertipDesign(**fields), DesignStudy(**study)) for case_id, fields, study in items]
+    first, study = designs[0][1], designs[0][2]
+    shear_scene, twist_scene = design_scenes(first, study)
+    timings, fem_metrics, results, error = {}, {}, {}, None
+    start = time.perf_counter()
+    try:
+        prepared = prepare(shear_scene)
+        timings["prepare"] = time.perf_counter() - start
+        solve_start = time.perf_counter()
+        results["shear"] = solve_scene(shear_scene, prepared)
+        press = results["shear"].increments[0]
+        fem_metrics.update(capacity_metrics(press, results["shear"].candidate_positions,
+                                            results["shear"].candidate_areas, shear_scene.body.center,
+                                            study.friction_coefficient))
+        fem_metrics.update(drop_metrics(results["shear"].increments[1:], study.load_ratios))
+        fem_metrics.update(mesh_metrics(press, study.size_contact, first.bump_radius, first.youngs_modulus,
+                                        first.poissons_ratio))
+        if twist_scene is not None:
+            results["twist"] = solve_scene(twist_scene, prepared)
+        timings["solve"] = time.perf_counter() - solve_start
+        timings.update({f"fem_{k}": float(v) for k, v in results["shear"].timings.items()})
+        timings["dofs"] = results["shear"].mesh_info["dofs"]
+    except (PathNotCompleted, LoadNotCarried, ContactUnderResolved, ValueError, RuntimeError) as failure:
+        error = f"{type(failure).__name__}: {failure}"
+    fem_seconds = time.perf_counter() - start
+    for case_id, design, study in designs:
+        case_start = time.perf_counter()
+        metrics = dict(fem_metrics)
+        increments, status, message = [], "ok" if error is None else "failed", error
+        if "shear" in results:                      # the shear path's metrics survive a failed twist path
+            try:
+                angles = twist_angles(design, study)
+                draws = range(study.noise_draws) if study.sensor is SensorModel.CAPACITIVE else (0,)
+                if "twist" not in results:
+                    angles = ()
+                estimated, estimates = estimation_metrics(results["shear"], results.get("twist"),
+                                                          design.sensor(study.sensor), design.layout(), draws,
+                                                          study.frames_per_state, angles)
+                metrics.update(estimated)
+                increments = _increment_rows(results["shear"], "shear", study.load_ratios, estimates["shift"])
+                if "twist" in results:
+                    increments += _increment_rows(results["twist"], "twist", (), estimates["angle"])
+            except (ValueError, RuntimeError) as failure:
+                status, message = "failed", f"{type(failure).__name__}: {failure}"
+        bad = [key for key, value in metrics.items() if isinstance(value, float) and not math.isfinite(value)]
+        if bad and status == "ok":
+            status, message = "failed", f"non-finite metric(s) refused: {bad}"
+            metrics = {key: (None if key in bad else value) for key, value in metrics.items()}
+        case_timings = dict(timings, fem_wall=fem_seconds if case_id == designs[0][0] else 0.0,
+                            sensor_wall=time.perf_counter() - case_start)
+        record = design_record(case_id, design, status, message, metrics, increments, case_timings, group)
+        if cases_dir is not None:
+            write_record(cases_dir, record)
+        yield record

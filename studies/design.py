@@ -1,0 +1,150 @@
+"""Fingertip design sweep (FEM -> sensor -> estimator, resumable, on dask): python -m studies design FILE --out DIR.
+
+The design file lists fingertip designs and the study they go through (format: controller/_design_file.py; example:
+studies/designs/array_size_and_stiffness.toml); ``controller.design.design_sweep`` does the work. Writes
+DIR/cases/<id>.json as each design finishes, DIR/design.parquet and DIR/design.csv (one typed row per design: its
+parameters, every metric, status, timings), DIR/design_increments.parquet (one row per design, path and increment)
+and the Pareto figure DIR/design.png/.pdf. A re-run skips the designs recorded (id = hash of design, study and
+package version).
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+from studies._output import save_figure, write_json_atomic
+
+NAME = "design"
+# objectives of the Pareto front: lower estimation errors and a gentler stick-ratio drop, more torque capacity
+OBJECTIVES = {"translational_error": "lower", "rotational_error": "lower", "stick_ratio_drop": "lower",
+              "torque_capacity": "higher", "combined_torque_capacity": "higher"}
+
+
+def add_arguments(parser) -> None:
+    from studies.sweep import add_runner_arguments
+
+    parser.add_argument("design_file", type=Path, help="design TOML file (see studies/designs/)")
+    add_runner_arguments(parser)
+
+
+def _check_out_dir(out_dir: Path, spec) -> dict:
+    """The identity of this sweep; refuse an --out that holds another one (other name or axes)."""
+    identity = {"name": spec.name, "axes": sorted(spec.axes)}
+    previous = out_dir / f"{NAME}.json"
+    if previous.exists():
+        try:
+            stored = json.loads(previous.read_text())
+            stored = {"name": stored["name"], "axes": sorted(stored["axes"])}
+        except (OSError, ValueError, KeyError, TypeError):
+            stored = None
+        if stored != identity:
+            raise ValueError(f"--out {str(out_dir)!r} holds another design sweep ({stored or 'unreadable design.json'}"
+                             f"; this one is {identity}): choose another --out, or delete that folder")
+    return identity
+
+
+def write_tables(records: list[dict], out_dir: Path) -> None:
+    """design.parquet, design.csv and design_increments.parquet from the records so far (atomically)."""
+    from controller.design import design_table, increment_table
+    from fem.atomic import atomic_path
+
+    for name, table in ((NAME, design_table(records)), (f"{NAME}_increments", increment_table(records))):
+        with atomic_path(out_dir / f"{name}.parquet") as temporary:
+            table.to_parquet(temporary, index=False)
+    with atomic_path(out_dir / f"{NAME}.csv") as temporary:
+        design_table(records).to_csv(temporary, index=False)
+
+
+def run(out_dir, quick: bool = False, design_file: Path | None = None, scheduler: str = "local", workers: int = 2,
+        connect_timeout: float = 5.0, retry_failed: bool = False, quiet: bool = False) -> dict:
+    """Run (or resume) the design sweep; tables, Pareto figure; returns counts and the wall time."""
+    from controller.design import DESIGN_COLUMNS, design_sweep, pareto_front
+    from fem.task_runner import check_scheduler
+
+    if design_file is None:
+        raise ValueError("design needs a design file: python -m studies design DESIGN.toml --out DIR")
+    check_scheduler(scheduler)
+    from controller.design import load_design_file
+
+    spec = load_design_file(design_file, quick=quick)        # every design validated before anything runs
+    import pyarrow  # noqa: F401  (fail now, not after the solves, if the Parquet writer is missing)
+
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    identity = _check_out_dir(out_dir, spec)
+    write_json_atomic(out_dir / f"{NAME}.json", {**identity, "source": spec.source, "description": spec.description,
+                                                 "grid": {k: list(v) for k, v in spec.grid},
+                                                 "list": {k: list(v) for k, v in spec.zipped},
+                                                 "study": spec.study.document(), "designs": len(spec.designs)})
+    start = time.perf_counter()
+    arrived = []
+
+    def on_record(record):
+        arrived.append(record)
+        write_tables(arrived, out_dir)                     # the tables are always complete up to the last design
+
+    table = design_sweep(spec.designs, spec.study, out_dir=out_dir, scheduler=scheduler, workers=workers,
+                         connect_timeout=connect_timeout, retry_failed=retry_failed, progress=not quiet,
+                         on_record=on_record)
+    records = [json.loads((out_dir / "cases" / f"{case_id}.json").read_text()) for case_id in table["case_id"]]
+    write_tables(records, out_dir)
+    front = pareto_front(table, OBJECTIVES)
+    seconds = time.perf_counter() - start
+    save_figure(plot_pareto(table, front, spec.name, spec.axes or DESIGN_COLUMNS[:3]), out_dir, NAME)
+    failed = int((table["status"] != "ok").sum())
+    print(f"{NAME}: {len(table)} designs, {failed} failed, {int(front.sum())} on the Pareto front; {seconds:.1f} s")
+    for _, row in table[front].iterrows():
+        print(f"  front: {_label(row, spec.axes)}: translation {100 * row['translational_error']:.1f} %, rotation "
+              f"{_percent(row['rotational_error'])}, drop {row['stick_ratio_drop']:.2f}, torque capacity "
+              f"{row['torque_capacity']:.2f} mm")
+    return {"designs": len(table), "failed": failed, "front": int(front.sum()), "wall_time": seconds}
+
+
+def _percent(value) -> str:
+    import pandas as pd
+
+    return "-" if pd.isna(value) else f"{100 * value:.1f} %"
+
+
+def _label(row, axes) -> str:
+    return ", ".join(f"{axis}={row[axis]:g}" if not isinstance(row[axis], str) else f"{axis}={row[axis]}"
+                     for axis in axes)
+
+
+def plot_pareto(table, front, title: str, axes):
+    """Two trade-offs, each design a point (the Pareto front over all OBJECTIVES filled, the 2D front of the panel
+    drawn): translational error against torque capacity, rotational error against the stick-ratio drop."""
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from controller.design import pareto_front
+
+    panels = ((("torque_capacity", "torque capacity per unit grasp force [mm]", 1.0),
+               ("translational_error", "translational estimation error [%]", 100.0)),
+              (("stick_ratio_drop", "stick-ratio drop before gross slip, c/a / (1 - Q/(mu P)) [1]", 1.0),
+               ("rotational_error", "rotational estimation error [%]", 100.0)))
+    fig, grid = plt.subplots(1, 2, figsize=(12, 5))
+    ok = (table["status"] == "ok").to_numpy()
+    for axis, ((x_key, x_label, x_scale), (y_key, y_label, y_scale)) in zip(grid, panels):
+        x = table[x_key].to_numpy(dtype=float, na_value=np.nan) * x_scale
+        y = table[y_key].to_numpy(dtype=float, na_value=np.nan) * y_scale
+        shown = ok & np.isfinite(x) & np.isfinite(y)
+        axis.scatter(x[shown & ~front], y[shown & ~front], facecolors="none", edgecolors="#636363", label="design")
+        axis.scatter(x[shown & front], y[shown & front], color="#de2d26", label="Pareto front (all objectives)",
+                     zorder=3)
+        local = pareto_front(table, {x_key: OBJECTIVES[x_key], y_key: OBJECTIVES[y_key]}) & shown
+        order = np.argsort(x[local])
+        axis.plot(x[local][order], y[local][order], "--", color="#de2d26", lw=1, label="front of this panel")
+        for index in np.flatnonzero(shown):
+            axis.annotate(_label(table.iloc[index], axes), (x[index], y[index]), fontsize=6,
+                          textcoords="offset points", xytext=(3, 3))
+        axis.set_xlabel(x_label)
+        axis.set_ylabel(y_label)
+        axis.grid(alpha=0.3)
+    grid[0].legend(fontsize=8)
+    fig.suptitle(f"{title}: {int(ok.sum())} designs, {int(front.sum())} on the Pareto front "
+                 f"(objectives: {', '.join(f'{k} {v}' for k, v in OBJECTIVES.items())})", fontsize=9)
+    fig.tight_layout()
+    return fig
