@@ -1,13 +1,14 @@
 """Resumable tables of closed-loop trials: one CSV row per trial, written as each finishes, skipped on a re-run.
 
-A trial is known by a key made of its object, its settings and the package version (``trial_key``): a re-run with
-the same jobs reads the rows already in ``NAME_trials.csv`` and runs only the missing ones; after an upgrade, or with
-other settings, every trial runs again. Rows are kept in job order.
+A trial is known by a key made of its object, its settings and a hash of the closed loop's sources (``trial_key``): a
+re-run with the same jobs reads the rows already in ``NAME_trials.csv`` and runs only the missing ones; after an edit
+of the controller or the fingertip model, or with other settings, every trial runs again. Rows are kept in job order.
 """
 
 from __future__ import annotations
 
 import csv
+import functools
 import hashlib
 import json
 from collections.abc import Callable
@@ -17,15 +18,27 @@ from pathlib import Path
 from studies._output import write_csv_atomic
 
 
-def trial_key(obj, settings, extra: str = "") -> str:
-    """Stable key of a trial: object, settings, ``extra`` (e.g. the controller) and the package version."""
-    from importlib.metadata import PackageNotFoundError, version
+@functools.lru_cache(maxsize=1)
+def closed_loop_sources() -> str:
+    """SHA-256 of the sources a trial runs (every file of the controller and contact packages, the calibration
+    data included): an edit of the controller or the fingertip model makes every stored trial stale, where the
+    package version of an editable install would not change."""
+    import contact
+    import controller
 
-    try:
-        package = version("fingertip-contact")
-    except PackageNotFoundError:                                          # running from a plain checkout
-        package = "unknown"
-    text = json.dumps([asdict(obj), asdict(settings), extra, package], sort_keys=True, default=str)
+    digest = hashlib.sha256()
+    for package in (controller, contact):
+        root = Path(package.__file__).parent
+        for path in sorted(root.rglob("*")):
+            if path.suffix in (".py", ".json") and "__pycache__" not in path.parts:
+                digest.update(str(path.relative_to(root.parent)).encode())
+                digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+def trial_key(obj, settings, extra: str = "") -> str:
+    """Stable key of a trial: object, settings, ``extra`` (e.g. the controller) and the closed loop's sources."""
+    text = json.dumps([asdict(obj), asdict(settings), extra, closed_loop_sources()], sort_keys=True, default=str)
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
