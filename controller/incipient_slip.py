@@ -218,6 +218,7 @@ class IncipientSlipController:
         self._plateau = np.full(2, -1.0)                 # (|total load|, sum P) when the watch began (-1: not yet)
         self._history = _History(parameters.watch_frames, len(self.centres))     # (P_i, |rho_i|) of the last frames
         self._watching = False
+        self._probe_begun = False
         self._streak = np.zeros((2, len(self.centres) + 1), dtype=int)      # frames each bump / total has slid
         self._hold_time = 0.0
         self._release = None
@@ -296,7 +297,7 @@ class IncipientSlipController:
         if phase is not GraspPhase.RELEASE:
             self._release = None
         if phase is not GraspPhase.HOLD and self._hold_time > 0.0:
-            self._hold_time, self.probing, self._watching = 0.0, False, False
+            self._hold_time, self.probing, self._watching, self._probe_begun = 0.0, False, False, False
             self._start_watch()
         contacts = self._contacts
         if phase is GraspPhase.APPROACH:
@@ -316,13 +317,17 @@ class IncipientSlipController:
         return self.command
 
     def _hold_step(self) -> None:
-        """Start the watch after the probe delay; probe (raise mu_hat) until a slip is seen."""
+        """Start the watch one window before the probe delay; probe (raise mu_hat) until a slip is seen."""
         p = self.parameters
         self._hold_time += self.period
+        # the watch starts one window before the probe, so that its window is full when the grip begins to fall
+        # (else the first window of the probe, 0.25 s and 13 % of mu_hat, goes by unwatched)
+        if not self._watching and self._hold_time >= p.probe_delay - p.watch_frames / p.frame_rate_hz:
+            self._watching = True
         if self._hold_time < p.probe_delay:
             return
-        if not self._watching:
-            self._watching, self.probing = True, not self.slip_seen
+        if not self._probe_begun:
+            self._probe_begun, self.probing = True, not self.slip_seen
         if self.probing:
             self.friction_estimate = min(self.friction_estimate * math.exp(p.probe_rate * self.period),
                                          p.maximum_friction)
