@@ -111,6 +111,32 @@ def test_a_stuck_array_under_a_growing_force_is_not_seen_as_slip():
     assert not controller.slip_seen
 
 
+@pytest.mark.parametrize("noise", [0.0, 0.03])
+def test_a_sliding_bump_is_seen_and_a_stuck_one_is_not(noise):
+    """The watch's test on one window: the grip fell 12 % (a 25-frame window of the probe at 0.5/s). A bump on its
+    friction limit keeps |rho| = mu = 0.7; a stuck bump's load is fixed, so its ratio rises like P^-1 (at least
+    P^-2/3, the bound the test sits just under). With the sensor's noise margin (3 sigma ~ 0.03 at 1-2 mN per node)
+    the sliding bump must still be told apart."""
+    from controller._slip_kernels import slip_signature
+
+    parameters = IncipientSlipParameters()
+    centres = len(TIP.centres)
+    force_then = np.full((2, centres), 1.0)
+    force = np.full((2, centres), math.exp(-parameters.probe_rate * parameters.watch_frames / 100.0))
+    ratios_then = np.full((2, centres), 0.6)
+    ratios_then[0, 0] = 0.7                                              # bump 0 of fingertip 0 is on its limit
+    ratio = np.zeros((2, centres, 2))
+    ratio[..., 0] = ratios_then / (force / force_then) ** (2.0 / 3.0)    # stuck: the slowest rise a stuck bump has
+    ratio[0, 0, 0] = 0.7                                                 # sliding: flat at mu
+    signature = slip_signature(force, ratio, np.ones((2, centres), dtype=bool), force_then, ratios_then, True,
+                               np.full(2, -1.0), np.ones(2), 0.0, parameters.total_drop, parameters.force_drop,
+                               parameters.stick_exponent, parameters.loaded_share, parameters.force_share,
+                               np.full((2, centres), noise))[0]
+    assert signature[0, 0]
+    assert not signature[:, :centres].ravel()[1:].any()
+    assert not signature[:, centres].any()                 # the total: the load was not seen to fall (first frame)
+
+
 def test_array_margin_is_the_reduced_models_limit_of_point_contacts():
     rng = np.random.default_rng(4)
     for _ in range(5):
