@@ -210,6 +210,17 @@ def _revolved_profiles(geometry, segments: int):
     return profile, np.zeros((1, 2)), -geometry.cap_height
 
 
+def _not_interruptible_off_main_thread(gmsh) -> dict:
+    """gmsh.initialize installs a SIGINT handler, which Python allows only in the main thread: a dask worker's
+    thread (design and scene sweeps) must ask it not to (``interruptible``, in the gmsh versions that have it)."""
+    import inspect
+
+    if threading.current_thread() is threading.main_thread() \
+            or "interruptible" not in inspect.signature(gmsh.initialize).parameters:
+        return {}
+    return {"interruptible": False}
+
+
 def _gmsh_mesh(geometry, spec: TetMeshSpec) -> tuple[np.ndarray, np.ndarray]:
     """Nodes (n, 3) and tets (m, 4) [mm] of a cap or array: the base box fused with one solid of revolution per
     bump (a spline through the profile, revolved about the bump axis), meshed with the sizing field on one thread."""
@@ -218,7 +229,7 @@ def _gmsh_mesh(geometry, spec: TetMeshSpec) -> tuple[np.ndarray, np.ndarray]:
     width, depth = _footprint(geometry)
     floor = base_top - 0.5 * geometry.base_thickness          # the revolved solids reach into the base
     with _GMSH_LOCK:
-        gmsh.initialize(["-noenv"], readConfigFiles=False)
+        gmsh.initialize(["-noenv"], readConfigFiles=False, **_not_interruptible_off_main_thread(gmsh))
         try:
             for name, value in GMSH_OPTIONS.items():
                 gmsh.option.setNumber(name, value)

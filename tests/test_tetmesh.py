@@ -64,6 +64,18 @@ def test_meshing_twice_gives_the_same_mesh(bump_mesh, tmp_path):
     np.testing.assert_array_equal(again.mesh.t, bump_mesh.mesh.t)
 
 
+def test_meshing_off_the_main_thread_gives_the_same_mesh(bump_mesh, tmp_path):
+    # dask workers mesh in threads, where gmsh must not install its SIGINT handler (Python refuses it there)
+    import threading
+
+    meshed = []
+    worker = threading.Thread(target=lambda: meshed.append(mesh_gel(BUMP, BUMP_SPEC, tmp_path)))
+    worker.start()
+    worker.join()
+    assert meshed and not meshed[0].from_cache
+    np.testing.assert_array_equal(meshed[0].mesh.p, bump_mesh.mesh.p)
+
+
 def test_cache_key_changes_with_the_mesher(monkeypatch, tmp_path):
     before = mesh_gel(BlockGeometry(4.0, 4.0, 2.0), TetMeshSpec(0.5, 1.0, 0.5), tmp_path).key
     monkeypatch.setattr(tetmesh, "MESHER_REVISION", tetmesh.MESHER_REVISION + 1)
