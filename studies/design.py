@@ -137,14 +137,35 @@ def plot_pareto(table, front, title: str, axes):
         local = pareto_front(table, {x_key: OBJECTIVES[x_key], y_key: OBJECTIVES[y_key]}) & shown
         order = np.argsort(x[local])
         axis.plot(x[local][order], y[local][order], "--", color="#de2d26", lw=1, label="front of this panel")
-        for index in np.flatnonzero(shown):
-            axis.annotate(_label(table.iloc[index], axes), (x[index], y[index]), fontsize=6,
-                          textcoords="offset points", xytext=(3, 3))
+        for number, index in enumerate(np.flatnonzero(front), start=1):     # numbered; listed under the panels
+            if shown[index]:
+                axis.annotate(str(number), (x[index], y[index]), fontsize=8, color="#de2d26",
+                              textcoords="offset points", xytext=(4, 3))
         axis.set_xlabel(x_label)
         axis.set_ylabel(y_label)
         axis.grid(alpha=0.3)
     grid[0].legend(fontsize=8)
-    fig.suptitle(f"{title}: {int(ok.sum())} designs, {int(front.sum())} on the Pareto front "
+    fig.suptitle(f"{title}: {int(ok.sum())} designs, {int(front.sum())} on the Pareto front\n"
                  f"(objectives: {', '.join(f'{k} {v}' for k, v in OBJECTIVES.items())})", fontsize=9)
-    fig.tight_layout()
+    listing = [f"{number}: {_short_label(table.iloc[index], axes)}"
+               for number, index in enumerate(np.flatnonzero(front), start=1)]
+    fig.text(0.01, 0.01, "Pareto front:  " + ";   ".join(listing), fontsize=8, wrap=True, va="bottom")
+    fig.tight_layout(rect=(0, 0.03 + 0.025 * (len(listing) // 3), 1, 1))
     return fig
+
+
+SHORT_NAMES = {"youngs_modulus": ("E", " MPa"), "poissons_ratio": ("nu", ""), "sensor_pitch": ("sensor pitch", " mm"),
+               "pad_fill": ("pad fill", ""), "pitch": ("pitch", " mm"), "bump_radius": ("R", " mm"),
+               "base_thickness": ("base", " mm")}
+
+
+def _short_label(row, axes) -> str:
+    """The swept parameters of a design in a few words, e.g. ``3x3, E 0.3 MPa, sensor pitch 3 mm``."""
+    parts = [f"{row['rows']:g}x{row['cols']:g}"] if "rows" in axes or "cols" in axes else []
+    for axis in axes:
+        if axis in ("rows", "cols"):
+            continue
+        name, unit = SHORT_NAMES.get(axis, (axis, ""))
+        value = row[axis]
+        parts.append(f"{name} {value:.3g}{unit}" if not isinstance(value, str) else f"{name} {value}")
+    return ", ".join(parts)
