@@ -22,14 +22,11 @@ POISSONS_RATIO = 0.45
 FRICTION = 1.0
 NORMAL_FORCE = 2.0        # N, the plate's press, shared by all bumps
 # mm at the bump tops, from the 3x3-fingertip P1 cases of `python -m studies convergence` (knee: cheapest size within
-# 1.15x of the best stick-ratio error). h = 0.9 / 0.6 / 0.4 / 0.3 mm gave |c/a - CM| = 0.026 / 0.061 / 0.055 / 0.042,
-# bump contact radius +0.1 / +6.9 / +2.2 / +0.9 % vs Hertz(P/9), 3 / 4 / 10 / 20 s (mesh cached): that run's knee is
-# 0.9 mm. But fTetWild meshes differ between runs, and the error with them: a second mesh set gave 0.029 / 0.006 /
-# 0.056 / 0.036, an earlier one 0.056 / 0.046 / 0.061 / 0.039: 0.9 and 0.6 mm scatter by up to +-0.03 (a few
-# surface nodes over 9 contacts of a ~ 1.3 mm), 0.4 mm sits at 0.055-0.061, 0.3 mm at 0.036-0.042 (probably a model
-# floor: a/R ~ 0.27 on bumps of finite height is not Hertz's half-space). The knee of the worst case over the three
-# sets (0.056 / 0.061 / 0.061 / 0.042) is 0.3 mm, kept: a default must not hinge on one mesh draw, and 0.9 mm would
-# leave ~2 node spacings across a 4x4 bump's contact (a ~ 0.96 mm, fig6).
+# 1.15x of the best stick-ratio error). On the fTetWild meshes used before, whose error scattered from one mesh draw to
+# the next by up to +-0.03 at 0.9 and 0.6 mm, the knee of the worst case over three draws was 0.3 mm (0.4 mm sat at
+# 0.055-0.061, 0.3 mm at 0.036-0.042: probably a model floor, a/R ~ 0.27 on bumps of finite height is not Hertz's
+# half-space). Kept on the deterministic gmsh meshes: 0.9 mm would leave ~2 node spacings across a 4x4 bump's
+# contact (a ~ 0.96 mm, fig6).
 BENCH_SIZE_CONTACT = 0.3
 BENCH_SIZE_BASE = 1.0     # mm on the sensor plane: a third of the 3 mm sensor pitch
 FRAMES_PER_STATE = 10     # frames averaged per quasi-static state of a noisy sensor: 0.1 s at 100 Hz

@@ -6,8 +6,8 @@ carries Q/P = 0.5 of its own load) and the mean bump contact radius after the pr
 share P/9 (the base couples the bumps a little). Wall time is the whole solve (mesh - from the disk cache when it
 is there, see ``mesh_time`` - assembly, factorization, contact path).
 
-Sizes are chosen for run time (measured on 2 shared cores, fTetWild mesh cached; a cold cache adds 30-60 s of
-meshing per size):
+Sizes are chosen for run time (measured on 2 shared cores with the mesh cached, on the fTetWild meshes used before;
+gmsh meshes a size in a few seconds from a cold cache):
 - P1 at h = 0.9 / 0.6 / 0.4 / 0.3 mm: 27k to 57k DOF, 3 to 20 s each.
 - P2 only at the two coarsest sizes, h = 0.9 and 0.6 mm (nodes spaced h, tets 2h): 105k and 108k DOF (the base
   layer holds most of them), 50 to 75 s each, mostly ~1400 compliance columns of one back-substitution each;
