@@ -8,12 +8,20 @@ import numpy as np
 
 from fem.validation import check_positive, check_range
 
-__all__ = ["FirstOrderLowPass", "sample_period"]
+__all__ = ["FirstOrderLowPass", "sample_period", "tustin_gain"]
 
 
 def sample_period(sample_rate_hz: float, name: str = "sample_rate_hz") -> float:
     """Sample period T = 1 / f_s [s] of a loop running at ``sample_rate_hz`` [Hz] (> 0, checked)."""
     return 1.0 / check_positive(name, sample_rate_hz, "Hz")
+
+
+def tustin_gain(cutoff_hz: float, sample_rate_hz: float) -> float:
+    """Gain b [-] of the first-order Tustin low-pass y_k = b (x_k + x_{k-1}) + (1 - 2 b) y_{k-1}, cut-off pre-warped
+    (w_a = 2 / T tan(pi f_c T) [rad/s])."""
+    period = sample_period(sample_rate_hz)
+    warped = 2.0 / period * math.tan(math.pi * cutoff_hz * period)
+    return warped * period / (2.0 + warped * period)
 
 
 class FirstOrderLowPass:
@@ -40,8 +48,7 @@ class FirstOrderLowPass:
     def __init__(self, cutoff_hz: float, sample_rate_hz: float, initial=0.0):
         self.sample_period = sample_period(sample_rate_hz)
         self.cutoff_hz = check_range("cutoff_hz", cutoff_hz, 0.0, 0.5 * sample_rate_hz, "Hz", True, True)
-        warped = 2.0 / self.sample_period * math.tan(math.pi * self.cutoff_hz * self.sample_period)   # w_a [rad/s]
-        self._gain = warped * self.sample_period / (2.0 + warped * self.sample_period)                 # b [-]
+        self._gain = tustin_gain(self.cutoff_hz, sample_rate_hz)                                     # b [-]
         self.reset(initial)
 
     def reset(self, value=0.0) -> None:

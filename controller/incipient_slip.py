@@ -53,7 +53,7 @@ import numpy as np
 from fem.validation import check_positive, check_range
 
 from ._slip_kernels import array_margin, fingertip_need, low_pass_frame, slip_signature
-from .filters import sample_period
+from .filters import sample_period, tustin_gain
 from .references import GraspPhase
 
 FULL_SEARCH_EVERY = 10              # frames between full searches of the array's slip centre (warm starts between)
@@ -161,13 +161,6 @@ class _History:
         self.force, self.ratios, self.count = np.zeros((frames, 2, count)), np.zeros((frames, 2, count)), 0
 
 
-def _tustin_gain(cutoff_hz: float, rate_hz: float) -> float:
-    """Gain b of the first-order Tustin low-pass y_k = b (x_k + x_{k-1}) + (1 - 2 b) y_{k-1} (``filters``)."""
-    period = sample_period(rate_hz)
-    warped = 2.0 / period * math.tan(math.pi * cutoff_hz * period)
-    return warped * period / (2.0 + warped * period)
-
-
 class _Filtered:
     """Low-passed bump forces (2, k) [N] and load ratios (2, k, 2) [-] with their previous inputs."""
 
@@ -209,8 +202,8 @@ class IncipientSlipController:
         self.time = 0.0
         self.slip_events = []
         count = len(self.centres)
-        self._signals = _Filtered(_tustin_gain(parameters.filter_cutoff_hz, parameters.frame_rate_hz), count)
-        self._watched = _Filtered(_tustin_gain(parameters.watch_cutoff_hz, parameters.frame_rate_hz), count)
+        self._signals = _Filtered(tustin_gain(parameters.filter_cutoff_hz, parameters.frame_rate_hz), count)
+        self._watched = _Filtered(tustin_gain(parameters.watch_cutoff_hz, parameters.frame_rate_hz), count)
         self._started = False
         self._contact = np.zeros((2, len(self.centres)), dtype=bool)
         self._contacts = 0                                 # bumps in contact on the fingertip that sees more

@@ -175,7 +175,8 @@ class GraspWorld:
         repeat = per_frame // controls if per_frame >= controls else 0
         records = np.zeros((frames, K.R_SIZE))
         signals = np.zeros((frames, 4))                                     # command, u_x, theta, mu_hat
-        hold_phase = np.array([phases[i * controls] is GraspPhase.HOLD for i in range(frames)])
+        frame_phases = phases[::controls][:frames]                           # the phase at each sensor frame
+        hold_phase = np.array([phase is GraspPhase.HOLD for phase in frame_phases])
         start = time.perf_counter()
         for frame_index in range(frames):
             frame = sensing.sense(bridge)
@@ -192,7 +193,7 @@ class GraspWorld:
                        self._grasp_local_m, records[frame_index])
             signals[frame_index] = (command, frame.shear_displacement, frame.twist_angle, grasp.friction_estimate)
             if hold_phase[frame_index] and not dropped:
-                dropped = (data.ncon > 0 and self._touches_table()) or \
+                dropped = self._touches_table() or \
                     records[frame_index, K.R_HEIGHT] < TABLE_CLEARANCE_M
         wall = time.perf_counter() - start
         unstable = data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number
@@ -200,7 +201,6 @@ class GraspWorld:
             raise RuntimeError(f"MuJoCo reset the simulation {unstable} times (bad accelerations) in trial "
                                f"{self.obj.name!r} at physics_rate_hz={physics_rate}: the step is too large for this world")
         times = np.arange(frames) / sensor_rate
-        frame_phases = [phases[i * controls] for i in range(frames)]
         return self._result(times, frame_phases, records, signals, dropped, bridge.peak_force_n, wall,
                             frames / sensor_rate)
 
