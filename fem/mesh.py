@@ -11,6 +11,7 @@ import numpy as np
 from fem.validation import check_positive, check_range
 
 __all__ = ["BlockMeshSpec", "graded_block_mesh", "mesh_quality", "MeshQuality", "quiet_skfem", "size_cells",
+           "positively_oriented",
            "BISECTION_TETS_PER_CELL", "GMSH_TETS_PER_CELL", "NODES_PER_TET"]
 
 _TET_EDGES = np.array([[0, 1], [0, 2], [0, 3], [1, 2], [1, 3], [2, 3]])
@@ -112,6 +113,16 @@ class MeshQuality:
     min_radius_ratio: float
     n_tets: int
     n_nodes: int
+
+
+def positively_oriented(nodes: np.ndarray, tets: np.ndarray) -> np.ndarray:
+    """Tets (m, 4) with two corners swapped where the volume is negative (VTK's and the quality measures'
+    convention; a mesher or a reflection may give either orientation); ``tets`` is not modified."""
+    corners = nodes[tets]                                                    # (m, 4, 3)
+    negative = np.linalg.det(corners[:, 1:] - corners[:, :1]) < 0.0
+    tets = tets.copy()
+    tets[negative] = tets[negative][:, [0, 2, 1, 3]]
+    return tets
 
 
 def mesh_quality(nodes: np.ndarray, tets: np.ndarray) -> MeshQuality:

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from fem.geometry import BlockGeometry
-from fem.mesh import MeshQuality, graded_block_mesh, mesh_quality, quiet_skfem
+from fem.mesh import MeshQuality, graded_block_mesh, mesh_quality, positively_oriented, quiet_skfem
 from fem.mesh_cache import MeshCache, cache_key
 from fem.validation import check_positive, check_range
 
@@ -299,10 +299,7 @@ def _clean(geometry, spec: TetMeshSpec, nodes: np.ndarray, tets: np.ndarray) -> 
         if nearby.size == 0 or nodes[nearby, 2].max() < -tolerance:
             raise MeshQualityError(f"no mesh node within {tolerance} mm of the top at contact point {center} mm")
         nodes[nearby[np.argmax(nodes[nearby, 2])], 2] = 0.0
-    corners = nodes[tets]                                                    # (m, 4, 3)
-    negative = np.linalg.det(corners[:, 1:] - corners[:, :1]) < 0.0
-    tets[negative] = tets[negative][:, [0, 2, 1, 3]]
-    return nodes, tets
+    return nodes, positively_oriented(nodes, tets)
 
 
 def _check_quality(nodes: np.ndarray, tets: np.ndarray, spec: TetMeshSpec) -> MeshQuality:

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from fem.atomic import atomic_path, write_text_atomic
+from fem.mesh import positively_oriented
 
 __all__ = ["STATE_NAMES", "write_vtu", "write_pvd", "mirrored_mesh"]
 
@@ -29,15 +30,6 @@ def mirrored_mesh(nodes: np.ndarray, tets: np.ndarray) -> tuple[np.ndarray, np.n
     source = np.concatenate([np.arange(len(nodes)), copies])
     sign = np.concatenate([np.ones(len(nodes)), -np.ones(copies.size)])
     return np.vstack([nodes, mirrored_nodes]), np.vstack([tets, mirrored_tets]), source, sign
-
-
-def _positive(nodes: np.ndarray, tets: np.ndarray) -> np.ndarray:
-    """Tets (m, 4) ordered for a positive volume (VTK's convention; skfem keeps the mesher's orientation)."""
-    corners = nodes[tets]                                                  # (m, 4, 3)
-    negative = np.linalg.det(corners[:, 1:] - corners[:, :1]) < 0.0
-    tets = tets.copy()
-    tets[negative] = tets[negative][:, [0, 2, 1, 3]]
-    return tets
 
 
 def _field_data_legend() -> str:
@@ -71,7 +63,7 @@ def write_vtu(result, out_dir: Path) -> list[Path]:
     source, sign = np.arange(n_vertices), np.ones(n_vertices)
     if half:
         nodes, tets, source, sign = mirrored_mesh(nodes, tets)
-    tets = _positive(nodes, tets)
+    tets = positively_oriented(nodes, tets)
     legend = _field_data_legend().replace("{half}", str(int(half)))
     flip_y = np.column_stack([np.ones_like(sign), sign, np.ones_like(sign)])          # (n_out, 3)
     paths = []

@@ -36,6 +36,13 @@ def closed_loop_sources() -> str:
     return digest.hexdigest()
 
 
+def check_trials(trials) -> int:
+    """``trials`` per object or case must be an integer >= 1 (not a bool)."""
+    if isinstance(trials, bool) or not isinstance(trials, int) or trials < 1:
+        raise ValueError(f"trials={trials!r} must be an integer >= 1")
+    return trials
+
+
 def trial_key(obj, settings, extra: str = "") -> str:
     """Stable key of a trial: object, settings, ``extra`` (e.g. the controller) and the closed loop's sources."""
     text = json.dumps([asdict(obj), asdict(settings), extra, closed_loop_sources()], sort_keys=True, default=str)

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from studies._output import save_figure, write_csv_atomic
-from studies._trials import run_trial_table, trial_key
+from studies._trials import check_trials, run_trial_table, trial_key
 
 NAME = "fig10"
 FRICTION = 0.6                  # (a) bottle
@@ -60,8 +60,7 @@ def run(out_dir, quick: bool = False, trials: int | None = None, processes: int 
 
     out_dir = Path(out_dir)
     trials = (2 if quick else TRIALS) if trials is None else trials
-    if isinstance(trials, bool) or not isinstance(trials, int) or trials < 1:
-        raise ValueError(f"trials={trials!r} must be an integer >= 1")
+    check_trials(trials)
     hold = 2.0 if quick else 4.0
     series_settings = {"bottle": ("bottle_horizontal", TrialSettings(friction_coefficient=FRICTION, hold_time=hold,
                                                                      seed=3)),

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 from studies._output import save_figure
-from studies._trials import run_trial_table, trial_key
+from studies._trials import check_trials, run_trial_table, trial_key
 
 NAME = "fig11"
 SIZE = (0.200, 0.070, 0.070)          # m, the horizontal bottle
@@ -72,8 +72,7 @@ def run(out_dir, quick: bool = False, trials: int | None = None, processes: int 
 
     out_dir = Path(out_dir)
     trials = (1 if quick else TRIALS) if trials is None else trials
-    if isinstance(trials, bool) or not isinstance(trials, int) or trials < 1:
-        raise ValueError(f"trials={trials!r} must be an integer >= 1")
+    check_trials(trials)
     rng = np.random.default_rng(11)
     jobs = []
     for mass, lever in cases(quick):

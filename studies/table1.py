@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from studies._output import save_figure, write_json_atomic
-from studies._trials import run_trial_table, trial_key
+from studies._trials import check_trials, run_trial_table, trial_key
 
 NAME = "table1"
 PAPER_SUCCESS = {"bottle_upright": "10/10", "bottle_horizontal": "10/10", "eclair": "10/10"}
@@ -64,8 +64,7 @@ def run(out_dir, quick: bool = False, trials: int | None = None, seed: int = 1,
 
     out_dir = Path(out_dir)
     trials = (3 if quick else TRIALS) if trials is None else trials
-    if isinstance(trials, bool) or not isinstance(trials, int) or trials < 1:
-        raise ValueError(f"trials={trials!r} must be an integer >= 1")
+    check_trials(trials)
     unknown = sorted(set(objects or ()) - set(TABLE_I_OBJECTS))
     if unknown or objects == []:
         raise ValueError(f"objects={objects!r}: unknown {unknown}; allowed: {list(TABLE_I_OBJECTS)}")

@@ -46,8 +46,11 @@ def test_light_object_is_lifted_and_held_without_creep():
     assert held.creep_um_per_s < 5.0
     assert max(held.trace["object_height_m"]) > 0.04                        # it went up with the gripper
     controlled = run_trial(box, TrialSettings(friction_coefficient=0.8, place=False))
-    # the controller probes its grip down to the first slip and settles above the limit: held, a short slide
-    assert controlled.success and controlled.hold_force_settled > needed and controlled.hold_slip_mm < 5.0
+    # the controller probes its grip down to the first slip and settles above the limit: held, after a slide
+    # shorter than a bump's contact radius (~1 mm) before the grip steps up (measured 0.30 mm)
+    assert controlled.success and controlled.hold_force_settled > needed and controlled.hold_slip_mm < 1.0
+    # mu_hat is a sliding bump's load ratio read through the sensor, whose per-bump CoP the reduced model gives
+    # within 3.8-8.8 % of the FEM (reduced-calibration): 10 % (measured 0.848, +6 %)
     assert controlled.friction_estimate == pytest.approx(0.8, rel=0.1)
 
 
