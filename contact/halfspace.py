@@ -217,7 +217,7 @@ def solve_halfspace(scene: Scene, spacing: float, extent: float | None = None) -
     """
     from contact._controls import check_feasible, controls as load_controls, scaled, solve_with_substeps
     from contact._newton import OPEN, STICK, ContactState, solve_increment
-    from contact.solver import estimated_contact
+    from contact.limits import estimated_contact
 
     if scene.body.shape != "sphere":
         raise ValueError(f"body.shape={scene.body.shape!r}: the half-space reference takes a sphere body only")

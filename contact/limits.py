@@ -59,7 +59,7 @@ def _max_normal_load(scene: Scene) -> tuple[float | None, float | None]:
 
 def contact_centers(scene: Scene) -> np.ndarray:
     """Where the body first touches the gel, (k, 2) [mm]: below a sphere's centre, or every bump top for a plane."""
-    if scene.body.shape == "sphere":
+    if scene.body.shape == BodyShape.SPHERE:
         return np.array([scene.body.center], dtype=float)
     return np.asarray(scene.gel.geometry.contact_centers(), dtype=float).reshape(-1, 2)
 
@@ -74,10 +74,8 @@ def estimated_contact(scene: Scene) -> tuple[float, float]:
     force, depth = _max_normal_load(scene)
     e_star = scene.material.effective_modulus
     n_centers = len(contact_centers(scene))
-    body_radius = scene.body.radius if scene.body.shape == "sphere" else math.inf
-    curvature = 1.0 / body_radius + 1.0 / scene.gel.curvature_radius
-    if curvature > 0.0:
-        radius = 1.0 / curvature
+    radius = _contact_curvature_radius(scene)
+    if math.isfinite(radius):
         from_force = (3.0 * (force or 0.0) / n_centers * radius / (4.0 * e_star)) ** (1 / 3)
         contact_radius = max(from_force, math.sqrt(radius * depth) if depth else 0.0)
         return contact_radius, contact_radius**2 / radius
@@ -108,6 +106,13 @@ def _estimated_depth(scene: Scene) -> float:
     return estimated_contact(scene)[1]
 
 
+def _level(ratio: float, warn: float, refuse: float) -> int:
+    """0 within the model, 1 past ``warn``, 2 at or past ``refuse`` or not finite (no number to trust)."""
+    if not math.isfinite(ratio) or ratio >= refuse:
+        return 2
+    return 1 if ratio > warn else 0
+
+
 def check_scene_limits(scene: Scene) -> list[str]:
     """Warn (PhysicalLimitWarning) past the small-strain and contact-width thresholds and refuse
     (PhysicalLimitError) past their limits, from closed-form estimates of the largest press; returns the warnings."""
@@ -115,22 +120,24 @@ def check_scene_limits(scene: Scene) -> list[str]:
     depth = _estimated_depth(scene)
     strain = depth / thickness
     problems, notes = [], []
-    if not math.isfinite(strain) or strain >= SMALL_STRAIN_REFUSE:
+    level = _level(strain, SMALL_STRAIN_WARN, SMALL_STRAIN_REFUSE)
+    if level == 2:
         problems.append(f"the largest press would indent the gel about {depth:.3g} mm into its {thickness:g} mm "
                         f"(d/H = {strain:.3g}, half-space estimate): past d/H = {SMALL_STRAIN_REFUSE} a linear, "
                         f"small-strain gel means nothing; lower the press")
-    elif strain > SMALL_STRAIN_WARN:
+    elif level == 1:
         notes.append(f"the largest press indents the gel about {depth:.3g} mm into its {thickness:g} mm (d/H = "
                      f"{strain:.2f} > {SMALL_STRAIN_WARN}): past small strain, the linear answer is less accurate")
     radius = _contact_curvature_radius(scene)
     if math.isfinite(radius):
         contact_radius = estimated_contact(scene)[0]
         width = contact_radius / radius
-        if not math.isfinite(width) or width >= CONTACT_WIDTH_REFUSE:
+        level = _level(width, CONTACT_WIDTH_WARN, CONTACT_WIDTH_REFUSE)
+        if level == 2:
             problems.append(f"the contact radius would be about {contact_radius:.3g} mm on a curvature radius of "
                             f"{radius:.3g} mm (a/R = {width:.3g} >= {CONTACT_WIDTH_REFUSE}): not a small contact; "
                             f"lower the press")
-        elif width > CONTACT_WIDTH_WARN:
+        elif level == 1:
             notes.append(f"contact radius about {contact_radius:.3g} mm on a curvature radius of {radius:.3g} mm "
                          f"(a/R = {width:.2f} > {CONTACT_WIDTH_WARN}): Hertz's small-contact assumption is stretched")
     if problems:
@@ -147,21 +154,23 @@ def check_increment_limits(scene: Scene, depth: float, slid: float, contact_radi
     limits (PhysicalLimitError keeping ``result``)."""
     thickness = scene.gel.thickness_under_contact
     strain = depth / thickness
-    if strain >= SMALL_STRAIN_REFUSE:
+    level = _level(strain, SMALL_STRAIN_WARN, SMALL_STRAIN_REFUSE)
+    if level == 2:
         raise PhysicalLimitError(f"increment {number}: the body is {depth:.3g} mm into the {thickness:g} mm gel "
                                  f"(d/H = {strain:.3g} >= {SMALL_STRAIN_REFUSE}): past small strain, refused", result)
-    if strain > SMALL_STRAIN_WARN and "strain" not in warned:
+    if level == 1 and "strain" not in warned:
         warned.add("strain")
         warnings.warn(f"increment {number}: depth {depth:.3g} mm of the {thickness:g} mm gel (d/H = {strain:.2f} > "
                       f"{SMALL_STRAIN_WARN}): past small strain", PhysicalLimitWarning, stacklevel=3)
     if scene.body.shape != BodyShape.SPHERE or contact_radius <= 0.0:
         return                                   # a plane slides along itself, and a sphere twists in place
     sliding = slid / contact_radius
-    if sliding >= SLIDING_REFUSE:
+    level = _level(sliding, SLIDING_WARN, SLIDING_REFUSE)
+    if level == 2:
         raise PhysicalLimitError(f"increment {number}: a contact point has slid {slid:.3g} mm, {sliding:.2f} of the "
                                  f"contact radius {contact_radius:.3g} mm (>= {SLIDING_REFUSE}): the contact is "
                                  f"paired at the start (small sliding), refused; shift less", result)
-    if sliding > SLIDING_WARN and "sliding" not in warned:
+    if level == 1 and "sliding" not in warned:
         warned.add("sliding")
         warnings.warn(f"increment {number}: a contact point has slid {slid:.3g} mm, {sliding:.2f} of the contact "
                       f"radius (> {SLIDING_WARN}): the small-sliding gap is approximate", PhysicalLimitWarning,

@@ -12,7 +12,7 @@ import pytest
 
 from contact import (BodySpec, ContactSpec, GelSpec, Load, LoadKind, Material, MeshSettings, PhysicalLimitError,
                      PhysicalLimitWarning, Scene, solve_scene)
-from contact.limits import SLIDING_WARN, check_scene_limits
+from contact.limits import SLIDING_WARN, check_increment_limits, check_scene_limits
 from contact.theory import hertz
 
 BLOCK = GelSpec("block", (("width", 20.0), ("depth", 20.0), ("thickness", 10.0)))
@@ -218,3 +218,11 @@ def test_a_sweep_refuses_another_sweeps_out_and_reruns_an_empty_record(tmp_path)
     assert _read_record(record) is None                                 # not a record: the case runs again
     record.write_text(json.dumps({"case_id": record.stem, "status": "ok", "increments": []}))
     assert _read_record(record)["status"] == "ok"
+
+
+@pytest.mark.parametrize("depth, slid", [(float("nan"), 0.0), (0.1, float("inf"))])
+def test_an_increment_without_a_finite_depth_or_slide_is_refused(depth, slid):
+    # no number to trust is not "within the model": refused like a value past the limit, never passed on
+    scene = _scene(BLOCK, (Load(LoadKind.PRESS, "force", (0.2,)),))
+    with pytest.raises(PhysicalLimitError, match=r"increment 1: .*refused"):
+        check_increment_limits(scene, depth, slid, 1.0, 1, None, set())
