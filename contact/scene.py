@@ -68,7 +68,7 @@ RENAMED_KEYS = {("contact", "mu"): "friction_coefficient"}     # (section, old k
 
 
 def _prefixed(prefix: str, error: ValueError) -> InputErrors:
-    problems = error.problems if isinstance(error, InputErrors) else [str(error)]
+    problems = InputErrors.problems_of(error)
     return InputErrors(f"{prefix}{problem}" for problem in problems)
 
 
@@ -340,7 +340,7 @@ def _build(cls, table, section: str):
     try:
         built = cls(**values)
     except ValueError as error:
-        raise InputErrors(problems + (error.problems if isinstance(error, InputErrors) else [str(error)])) from None
+        raise InputErrors(problems + InputErrors.problems_of(error)) from None
     if problems:
         raise InputErrors(problems)
     return built
@@ -385,7 +385,7 @@ def scene_from_dict(data: dict) -> Scene:
         try:
             return build()
         except ValueError as error:
-            problems.extend(error.problems if isinstance(error, InputErrors) else [str(error)])
+            problems.extend(InputErrors.problems_of(error))
             return None
 
     allowed = sorted(set(SECTIONS) | {"gel", "name", "load"})

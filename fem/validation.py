@@ -24,6 +24,11 @@ class InputErrors(ValueError):
         self.problems = list(problems)
         super().__init__("\n".join(self.problems))
 
+    @staticmethod
+    def problems_of(error: ValueError) -> list[str]:
+        """The problems of any ValueError: an InputErrors' list, or the one message of another."""
+        return list(error.problems) if isinstance(error, InputErrors) else [str(error)]
+
 
 def check_all(*checks: Callable[[], object]) -> None:
     """Run every check (a callable raising ValueError) and raise one InputErrors with all their problems."""
@@ -31,10 +36,8 @@ def check_all(*checks: Callable[[], object]) -> None:
     for check in checks:
         try:
             check()
-        except InputErrors as error:
-            problems.extend(error.problems)
         except ValueError as error:
-            problems.append(str(error))
+            problems.extend(InputErrors.problems_of(error))
     if problems:
         raise InputErrors(problems)
 

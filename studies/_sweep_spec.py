@@ -153,7 +153,7 @@ def load_sweep(path: str | Path, quick: bool = False) -> SweepSpec:
     try:
         return sweep_from_dict(data, base_dir=Path(path).parent, quick=quick, source=str(path))
     except ValueError as error:
-        problems = error.problems if isinstance(error, InputErrors) else [str(error)]
+        problems = InputErrors.problems_of(error)
         raise InputErrors(f"{path}: {problem}" for problem in problems) from None
 
 
@@ -169,7 +169,7 @@ def sweep_from_dict(data: dict, base_dir: str | Path = ".", quick: bool = False,
         try:
             return build()
         except ValueError as error:
-            problems.extend(error.problems if isinstance(error, InputErrors) else [str(error)])
+            problems.extend(InputErrors.problems_of(error))
             return default
 
     for key in sorted(set(data) - set(TOP_KEYS)):
@@ -221,7 +221,7 @@ def _base_document(scene, base_dir: Path) -> dict:
     try:
         scene_from_dict(copy.deepcopy(document))
     except ValueError as error:
-        problems = error.problems if isinstance(error, InputErrors) else [str(error)]
+        problems = InputErrors.problems_of(error)
         raise InputErrors(f"scene: {problem}" for problem in problems) from None
     return document
 
@@ -322,7 +322,7 @@ def _build_cases(base: dict, grid, zipped) -> list[Case]:
         except ValueError as error:
             bad_cases += 1
             if bad_cases <= MAX_CASE_PROBLEMS:
-                lines = error.problems if isinstance(error, InputErrors) else [str(error)]
+                lines = InputErrors.problems_of(error)
                 problems.extend(f"case {dict(parameters)}: {line}" for line in lines)
             continue
         case_id = case_hash(document)
