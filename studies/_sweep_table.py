@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from fem.atomic import atomic_path
@@ -13,9 +12,22 @@ __all__ = ["case_row", "write_table", "plot_sweep", "TIMING_COLUMNS"]
 TIMING_COLUMNS = ("wall_time", "prepare_time", "solve_time", "prepared_here")
 
 
-def _column_value(value):
-    """Lists (e.g. a load path or a centre) go into the table as JSON text, so every column has one type."""
-    return json.dumps(value) if isinstance(value, list) else value
+def exploded(key: str, value) -> dict:
+    """A parameter as typed table columns: a scalar as itself, a list (a load path, a centre) one column per item,
+    ``key[0]``, ``key[1]``, ... (nested lists ``key[0][1]``), so pandas and ParaView read numbers, not text."""
+    if not isinstance(value, (list, tuple)):
+        return {key: value}
+    columns = {}
+    for index, item in enumerate(value):
+        columns.update(exploded(f"{key}[{index}]", item))
+    return columns
+
+
+def axis_value(row: dict, axis: str):
+    """A case's value of a sweep axis from its table row: the scalar, or the tuple of a list axis' exploded items."""
+    if axis in row:
+        return row[axis]
+    return tuple(value for column, value in row.items() if column.startswith(f"{axis}["))
 
 
 def _case_quantity(record: dict, quantity: str):
@@ -35,7 +47,8 @@ def case_row(case, record: dict, outputs) -> dict:
     """The table row of a case: id, parameters, outputs (None where a failed case has no value), status, timings,
     worker and group, error message."""
     row = {"case_id": case.case_id}
-    row.update({key: _column_value(value) for key, value in case.parameters})
+    for key, value in case.parameters:
+        row.update(exploded(key, value))
     increments = record.get("increments", [])
     for output in outputs:
         if output.increment is None:
@@ -85,16 +98,21 @@ def plot_sweep(rows: list[dict], axes: tuple[str, ...], zipped_axes: tuple[str, 
     for axis_row, axis in zip(grid, axes):
         partners = set(zipped_axes) if axis in zipped_axes else {axis}
         others = [a for a in axes if a not in partners]
-        values = [r[axis] for r in rows]
+        values = [axis_value(r, axis) for r in rows]
         numeric = all(_is_number(v) for v in values)
         categories = sorted({str(v) for v in values}) if not numeric else []
         lines: dict = {}
         for row in rows:
-            lines.setdefault(tuple(row[a] for a in others), []).append(row)
+            lines.setdefault(tuple(axis_value(row, a) for a in others), []).append(row)
+
+        def position(row):
+            value = axis_value(row, axis)
+            return value if numeric else categories.index(str(value))
+
         for panel, column in zip(axis_row, columns):
             for key, members in lines.items():
-                members = sorted(members, key=lambda r: r[axis] if numeric else categories.index(str(r[axis])))
-                xs = [r[axis] if numeric else categories.index(str(r[axis])) for r in members]
+                members = sorted(members, key=position)
+                xs = [position(r) for r in members]
                 ys = [r.get(column) if _is_number(r.get(column)) else float("nan") for r in members]
                 label = ", ".join(f"{a}={v}" for a, v in zip(others, key)) or None
                 line, = panel.plot(xs, [y if r["status"] == "ok" else float("nan") for y, r in zip(ys, members)],
