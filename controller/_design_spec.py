@@ -10,7 +10,7 @@ from enum import Enum
 
 import numpy as np
 
-from fem.validation import check_positive, check_range
+from fem.validation import check_integer, check_number, check_positive, check_range
 
 __all__ = ["SensorModel", "FingertipDesign", "DesignStudy", "design_id", "fem_key", "twist_angles", "design_scenes"]
 
@@ -20,18 +20,6 @@ class SensorModel(str, Enum):
 
     CAPACITIVE = "capacitive"     # controller.capacitive: pads with 0.5 mm gaps set by pad_fill, the documented node
     CELLS = "cells"               # the ideal array: whole cells, noise-free (pad_fill still sets the pads)
-
-
-def _check_integer(name: str, value, low: int, high: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not low <= value <= high:
-        raise ValueError(f"{name}={value!r} must be an integer in [{low}, {high}]")
-    return int(value)
-
-
-def _check_number(name: str, value) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise ValueError(f"{name}={value!r} must be a number")
-    return float(value)
 
 
 @dataclass(frozen=True)
@@ -65,9 +53,9 @@ class FingertipDesign:
         for field in dataclasses.fields(self):
             value = getattr(self, field.name)
             if field.name in ("rows", "cols"):
-                _check_integer(field.name, value, 1, 12)
+                check_integer(field.name, value, 1, 12)
             else:
-                object.__setattr__(self, field.name, _check_number(field.name, value))
+                object.__setattr__(self, field.name, check_number(field.name, value))
         check_positive("youngs_modulus", self.youngs_modulus, "MPa")
         check_range("poissons_ratio", self.poissons_ratio, -1.0, 0.5, low_open=True, high_open=True)
         check_positive("sensor_pitch", self.sensor_pitch, "mm")
@@ -147,13 +135,13 @@ class DesignStudy:
 
     def __post_init__(self):
         for name in ("normal_force", "friction_coefficient", "size_contact", "size_base", "size_far"):
-            object.__setattr__(self, name, check_positive(name, _check_number(name, getattr(self, name))))
+            object.__setattr__(self, name, check_positive(name, check_number(name, getattr(self, name))))
         check_range("friction_coefficient", self.friction_coefficient, 0.0, 5.0, low_open=True)
         for name, low in (("load_ratios", 3), ("twist_fractions", 1)):
             values = getattr(self, name)
             if isinstance(values, (str, bytes)) or not hasattr(values, "__len__"):
                 raise ValueError(f"{name}={values!r} must be a list of numbers")
-            values = tuple(_check_number(f"{name}[{k}]", v) for k, v in enumerate(values))
+            values = tuple(check_number(f"{name}[{k}]", v) for k, v in enumerate(values))
             if len(values) < low or any(b <= a for a, b in zip(values, values[1:])) or values[0] <= 0.0:
                 raise ValueError(f"{name}={list(values)} must hold at least {low} increasing values > 0")
             object.__setattr__(self, name, values)
@@ -163,8 +151,8 @@ class DesignStudy:
             object.__setattr__(self, "sensor", SensorModel(self.sensor))
         except ValueError:
             raise ValueError(f"sensor={self.sensor!r} is not one of {[m.value for m in SensorModel]}") from None
-        _check_integer("noise_draws", self.noise_draws, 1, 1000)
-        _check_integer("frames_per_state", self.frames_per_state, 1, 10_000)
+        check_integer("noise_draws", self.noise_draws, 1, 1000)
+        check_integer("frames_per_state", self.frames_per_state, 1, 10_000)
 
     def document(self) -> dict:
         return {**dataclasses.asdict(self), "load_ratios": list(self.load_ratios),
