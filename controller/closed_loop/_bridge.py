@@ -93,9 +93,13 @@ class ContactBridge:
         control steps per physics step) and lift targets (n,) [m], in compiled code; the block's end into
         ``record`` (``_kernel.R_*``: grip force, object height, grasp point relative to the arm, rotation, sliding
         bumps) for the grasp point ``grasp_local`` [m] in the object's frame."""
-        K.run_block(commands, lift_targets, self.config, self.geometry, self.state, self.bumps, self.out, data.xpos,
-                    data.xmat, data.xipos, data.qvel, data.xfrc_applied, data.mocap_pos, data.ctrl, model._address,
-                    data._address, mujoco_step_function(), grasp_local, record)
+        K.run_block(commands, lift_targets, *self.compiled_inputs(model, data), mujoco_step_function(), grasp_local,
+                    record)
+
+    def compiled_inputs(self, model, data) -> tuple:
+        """The arrays and addresses ``run`` passes to the compiled block, in ``_fused.run_frames``' order."""
+        return (self.config, self.geometry, self.state, self.bumps, self.out, data.xpos, data.xmat, data.xipos,
+                data.qvel, data.xfrc_applied, data.mocap_pos, data.ctrl, model._address, data._address)
 
     def _field(self, column) -> np.ndarray:
         return self.out[:, column].reshape(2, self.count)

@@ -137,8 +137,7 @@ class SensingChain:
     def sense(self, bridge) -> SensorFrame:
         """Both estimators' view of the two fingertips at the bridge's current state (one sensor frame)."""
         count, nodes = len(self._centres), self._node_x.size
-        noise = self.rng.normal(0.0, self.array.noise_std, (2, nodes)) if self.array.noise_std > 0.0 \
-            else np.zeros((2, nodes))
+        noise = self.frame_noise(1)[0]
         readings, normal, ratio = np.empty((2, nodes)), np.empty((2, count)), np.empty((2, count, 2))
         force, shift, fit = np.empty((2, count)), np.empty((2, count, 2)), np.empty((2, 4))
         table_force, table_cop = self.reference_table
@@ -155,6 +154,19 @@ class SensingChain:
                                / (self.tip.parameters.couple_arm_at(safe) * safe), 0.0)
         return SensorFrame(force, force > threshold, shift, fit[:, 2:], np.where(fitted, fit[:, 1], 0.0), fitted,
                            u_x, theta, contacts, normal, ratio, loaded, ratio_noise)
+
+    def frame_noise(self, frames: int) -> np.ndarray:
+        """Node noise (frames, 2, n_nodes) [N] of the next ``frames`` sensor frames of both fingertips, drawn in
+        frame order (the same numbers as one frame at a time); zeros without noise."""
+        shape = (frames, 2, self._node_x.size)
+        return self.rng.normal(0.0, self.array.noise_std, shape) if self.array.noise_std > 0.0 else np.zeros(shape)
+
+    def compiled_inputs(self) -> tuple:
+        """The chain's constants in the order the compiled frame (``_fused._frame_loads``) takes them."""
+        return (self._couple_law, self.operator, self._inverse, float(self.array.offset),
+                float(self.array.quantization_step), float(self.settings.contact_threshold), self._region,
+                self._node_x, self._node_y, float(self.settings.node_floor), self._centres, *self.reference_table,
+                float(self.calibration.gain), float(self.array.noise_std), self._couple_noise)
 
     def bump_loads(self, readings):
         """Per-bump normal force (m, k) [N], load ratio (m, k, 2) [-] and loaded (m, k) bool of readings

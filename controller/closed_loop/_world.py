@@ -20,8 +20,11 @@ from controller.grasp_force_control import GraspForceController, GraspForceParam
 from controller.incipient_slip import IncipientSlipController, IncipientSlipParameters
 from controller.references import GraspPhase
 
+from controller._slip_frame import PHASE_CODES, SlipControllerState
+
+from . import _fused as F
 from . import _kernel as K
-from ._bridge import ContactBridge
+from ._bridge import ContactBridge, mujoco_step_function
 from ._sensing import SensingChain
 from ._trial import (APPROACH_GAP_M, ARM_RADIUS, GRAVITY, LIFT_HEIGHT_M, LOOP_RATE, MM_PER_M, TABLE_CLEARANCE_M,
                      TORQUE_LIMIT, ControllerKind, GraspObject, TrialResult, TrialSettings, default_tip)
@@ -168,16 +171,63 @@ class GraspWorld:
         frames = int(round(self.schedule[-1][0] * sensor_rate))
         phases = self._phases(np.arange(frames * controls) / control_rate)[0]
         lift = self._lift_heights_m(np.arange(frames * per_frame) / physics_rate)
-        command, dropped = 0.0, False
-        constant = s.constant_force
-        bridge, grasp, sensing = self.bridge, self.grasp, self.sensing
-        commands = np.zeros(controls)
-        repeat = per_frame // controls if per_frame >= controls else 0
         records = np.zeros((frames, K.R_SIZE))
-        signals = np.zeros((frames, 4))                                     # command, u_x, theta, mu_hat
+        signals = np.full((frames, F.F_SIZE), math.nan)          # command, u_x, theta, mu_hat, slip events
         frame_phases = phases[::controls][:frames]                           # the phase at each sensor frame
         hold_phase = np.array([phase is GraspPhase.HOLD for phase in frame_phases])
+        # control steps per physics step: the commands of a frame's physics steps (one held over several steps when
+        # the physics runs faster than the controller)
+        held = np.zeros((per_frame, controls // per_frame if per_frame < controls else 1))
+        loop = self._compiled_loop if isinstance(self.grasp, _IncipientSlip) else self._python_loop
         start = time.perf_counter()
+        dropped = loop(phases, lift, held, records, signals, hold_phase)
+        wall = time.perf_counter() - start
+        unstable = data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number
+        if unstable:
+            raise RuntimeError(f"MuJoCo reset the simulation {unstable} times (bad accelerations) in trial "
+                               f"{self.obj.name!r} at physics_rate_hz={physics_rate}: the step is too large for this world")
+        times = np.arange(frames) / sensor_rate
+        return self._result(times, frame_phases, records, signals, dropped, self.bridge.peak_force_n, wall,
+                            frames / sensor_rate)
+
+    def _dropped(self, record) -> bool:
+        """Whether the object touches the table or sank below the clearance (checked after each hold frame)."""
+        return self._touches_table() or record[K.R_HEIGHT] < TABLE_CLEARANCE_M
+
+    def _compiled_loop(self, phases, lift, held, records, signals, hold_phase) -> bool:
+        """The incipient-slip loop in compiled code (``_fused.run_frames``): runs of frames in one call, each hold
+        frame on its own until the object is found dropped. Returns whether it was."""
+        controls = len(phases) // len(records)
+        codes = np.array([PHASE_CODES[phase] for phase in phases], dtype=np.int64)
+        constant = math.nan if self.settings.constant_force is None else float(self.settings.constant_force)
+        count, sensing = len(self.tip.centres), self.sensing
+        buffers = F.frame_buffers(count, sensing.operator.shape[0])
+        ratio_noise, loaded = np.zeros((2, count)), np.zeros((2, count), dtype=np.bool_)
+        inputs = (sensing.compiled_inputs(), buffers, ratio_noise, loaded, self.grasp.state.arrays(), codes, constant,
+                  lift, np.zeros(controls), held, self.bridge.compiled_inputs(self.model, self.data),
+                  mujoco_step_function(), self._grasp_local_m, records, signals)
+        frames, frame, dropped = len(records), 0, False
+        while frame < frames:
+            checked = hold_phase[frame] and not dropped
+            stop = frame + 1
+            while not checked and stop < frames and not hold_phase[stop]:
+                stop += 1
+            F.run_frames(frame, stop, sensing.frame_noise(stop - frame), *inputs)
+            if checked:
+                dropped = self._dropped(records[frame])
+            frame = stop
+        self.grasp.collect_events(signals)
+        return dropped
+
+    def _python_loop(self, phases, lift, held, records, signals, hold_phase) -> bool:
+        """The frame loop in Python for a controller with no compiled form (the displacement-target law): sense,
+        observe, the frame's control steps, then its physics steps in compiled code. Returns whether the object
+        was found dropped."""
+        frames, per_frame = len(records), held.shape[0]
+        controls = len(phases) // frames
+        constant = self.settings.constant_force
+        bridge, grasp, sensing = self.bridge, self.grasp, self.sensing
+        commands, command, dropped = np.zeros(controls), 0.0, False
         for frame_index in range(frames):
             frame = sensing.sense(bridge)
             grasp.observe(frame)
@@ -188,21 +238,15 @@ class GraspWorld:
                 if constant is not None and phase is not GraspPhase.APPROACH:
                     command = constant if phase is not GraspPhase.RELEASE else 0.0
                 commands[step] = command
-            held = np.repeat(commands, repeat)[:, None] if repeat else commands.reshape(per_frame, -1)
-            bridge.run(model, data, held, lift[frame_index * per_frame:(frame_index + 1) * per_frame],
+            held[:] = commands.reshape(per_frame, -1) if held.shape[1] > 1 else \
+                commands[np.arange(per_frame) * controls // per_frame, None]
+            bridge.run(self.model, self.data, held, lift[frame_index * per_frame:(frame_index + 1) * per_frame],
                        self._grasp_local_m, records[frame_index])
-            signals[frame_index] = (command, frame.shear_displacement, frame.twist_angle, grasp.friction_estimate)
+            signals[frame_index, :F.F_EVENT] = (command, frame.shear_displacement, frame.twist_angle,
+                                                grasp.friction_estimate)
             if hold_phase[frame_index] and not dropped:
-                dropped = self._touches_table() or \
-                    records[frame_index, K.R_HEIGHT] < TABLE_CLEARANCE_M
-        wall = time.perf_counter() - start
-        unstable = data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number
-        if unstable:
-            raise RuntimeError(f"MuJoCo reset the simulation {unstable} times (bad accelerations) in trial "
-                               f"{self.obj.name!r} at physics_rate_hz={physics_rate}: the step is too large for this world")
-        times = np.arange(frames) / sensor_rate
-        return self._result(times, frame_phases, records, signals, dropped, bridge.peak_force_n, wall,
-                            frames / sensor_rate)
+                dropped = self._dropped(records[frame_index])
+        return dropped
 
     def _result(self, times, phases, records, signals, dropped, force_peak, wall, simulated) -> TrialResult:
         trace = {"time": times.tolist(), "phase": [phase.value for phase in phases],
@@ -265,24 +309,25 @@ class _DisplacementLaw:
 
 
 class _IncipientSlip:
-    """The incipient-slip controller fed from sensor frames."""
+    """The incipient-slip controller in its compiled form (``controller._slip_frame``), run by ``_fused``."""
 
     def __init__(self, controller: IncipientSlipController):
-        self.controller, self.parameters = controller, controller.parameters
+        self.parameters = controller.parameters
+        self.state = self.controller = SlipControllerState(controller)
 
     @property
     def minimum_force(self):
-        return self.controller.minimum_force
+        return self.state.minimum_force
 
     @property
     def friction_estimate(self) -> float:
-        return self.controller.friction_estimate
+        return self.state.friction_estimate
 
-    def observe(self, frame) -> None:
-        self.controller.observe(frame.normal_force, frame.load_ratio, frame.loaded, frame.ratio_noise)
-
-    def step(self, phase) -> float:
-        return self.controller.step(phase)
+    def collect_events(self, signals) -> None:
+        """The slip events the compiled loop marked in ``signals`` ((time [s], mu_hat) per detection)."""
+        seen = ~np.isnan(signals[:, F.F_EVENT])
+        self.state.slip_events.extend(zip(signals[seen, F.F_EVENT].tolist(),
+                                          signals[seen, F.F_EVENT_FRICTION].tolist()))
 
 
 def _controller(settings: TrialSettings, parameters, sensing: SensingChain, tip: ReducedFingertip):
