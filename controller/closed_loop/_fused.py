@@ -63,12 +63,15 @@ def _frame_loads(sensing, buffers, noise, out, ratio_noise):
 
 @njit(cache=True)
 def run_frames(first, stop, noise, sensing, buffers, ratio_noise, loaded, controller, phases, constant, lift,
-               commands, held, physics, mj_step, grasp_local, records, signals):
+               commands, held, physics, mj_step, grasp_local, records, signals, hold, sensordata, table_sensor,
+               clearance):
     """Frames [first, stop) of a trial (module docstring). ``noise`` (stop - first, 2, n_nodes) [N]: the node noise
     of these frames; ``phases`` (frames x control steps per frame,) ``PHASE_CODES``; ``constant`` [N] the constant
     force of a tau_min trial (NaN: the controller's); ``lift`` (frames x physics steps per frame,) [m]; ``commands``
     (control steps per frame,) and ``held`` (physics steps per frame, commands per physics step) work arrays;
-    ``records`` (frames, R_SIZE) and ``signals`` (frames, F_SIZE) take each frame's row."""
+    ``records`` (frames, R_SIZE) and ``signals`` (frames, F_SIZE) take each frame's row. Returns whether the
+    object was dropped: in a ``hold`` (frames,) frame MuJoCo found it on the table (``sensordata[table_sensor]``,
+    contacts object-table) or its bottom sank below ``clearance`` [m]."""
     (parameters, centres, second_frame, scalars, contact, filtered, ratios, plateau, history_force, history_ratios,
      streak, slip_centre) = controller
     (config, geometry, state, bumps, out, xpos, xmat, xipos, qvel, xfrc_applied, mocap_pos, ctrl, model_address,
@@ -77,6 +80,7 @@ def run_frames(first, stop, noise, sensing, buffers, ratio_noise, loaded, contro
     load_force, load_ratio = buffers[4], buffers[5]
     controls, per_frame = commands.shape[0], held.shape[0]
     spanned = held.shape[1]                                    # control steps per physics step (1: held over several)
+    dropped = False
     for frame in range(first, stop):
         u_x, theta = _frame_loads(sensing, buffers, noise[frame - first], out, ratio_noise)
         for f in range(2):
@@ -102,3 +106,6 @@ def run_frames(first, stop, noise, sensing, buffers, ratio_noise, loaded, contro
                     grasp_local, records[frame])
         signals[frame, F_COMMAND], signals[frame, F_SHEAR], signals[frame, F_TWIST] = command, u_x, theta
         signals[frame, F_FRICTION] = scalars[X_FRICTION]
+        if hold[frame] and not dropped:
+            dropped = sensordata[table_sensor] > 0.0 or records[frame, K.R_HEIGHT] < clearance
+    return dropped

@@ -64,6 +64,9 @@ def _mjcf(obj: GraspObject, settings: TrialSettings, tip: ReducedFingertip) -> s
   <actuator>
     <position name="lift" joint="lift" kp="20000"/>
   </actuator>
+  <sensor>
+    <contact name="table_contact" geom1="object" geom2="table" data="found" num="1"/>
+  </sensor>
 </mujoco>"""
 
 
@@ -98,9 +101,9 @@ class GraspWorld:
                                     0.5 * obj.size[1] + APPROACH_GAP_M, settings.implicit_coupling)
         self.sensing = SensingChain(self.tip, settings.sensor_noise, self.rng, settings.targets)
         self.grasp = _controller(settings, controller_parameters, self.sensing, self.tip)
-        ids = {name: mujoco.mj_name2id(self.model, kind, name) for kind, name in (
-            (mujoco.mjtObj.mjOBJ_GEOM, "table"), (mujoco.mjtObj.mjOBJ_GEOM, "object"))}
-        self.table_geom, self.object_geom = ids["table"], ids["object"]
+        # contacts object-table MuJoCo found in the last step (a position-stage sensor: it does not act on the world)
+        self.table_sensor = int(self.model.sensor_adr[mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_SENSOR,
+                                                                        "table_contact")])
         self.object_body, self.arm_body = self.bridge.object_id, self.bridge.arm_id
         self.schedule = self._schedule()
         control, sensor = self.grasp.parameters.sample_rate_hz, self.sensing.array.sample_rate_hz
@@ -126,32 +129,35 @@ class GraspWorld:
             schedule.append((end, GraspPhase(name)))
         return schedule
 
+    def _phase_index(self, times) -> np.ndarray:
+        """Index into the schedule of the phase at each of ``times`` [s] (the last phase's end and beyond: the
+        last)."""
+        ends = np.array([end for end, _ in self.schedule])
+        return np.minimum(np.searchsorted(ends, times, side="right"), len(ends) - 1)
+
     def _phases(self, times):
         """Phase (list of GraspPhase) and progress through it (array) at each of ``times`` [s] (the last phase's
         end and beyond count as its end)."""
         ends = np.array([end for end, _ in self.schedule])
         starts = np.concatenate([[0.0], ends[:-1]])
-        index = np.minimum(np.searchsorted(ends, times, side="right"), len(ends) - 1)
+        index = self._phase_index(times)
         progress = np.clip((times - starts[index]) / (ends[index] - starts[index]), 0.0, 1.0)
         return [self.schedule[i][1] for i in index], progress
 
     def _lift_heights_m(self, times) -> np.ndarray:
         """Lift target [m] at ``times`` [s]: a minimum-jerk rise in LIFT, held in HOLD, lowered in PLACE."""
-        phases, progress = self._phases(times)
+        progress, index = self._phases(times)[1], self._phase_index(times)
         rise = LIFT_HEIGHT_M * progress**3 * (10.0 - 15.0 * progress + 6.0 * progress**2)
-        height = np.zeros(len(phases))
-        for phase, value in ((GraspPhase.LIFT, rise), (GraspPhase.HOLD, np.full(len(phases), LIFT_HEIGHT_M)),
+        height = np.zeros(len(times))
+        scheduled = [phase for _, phase in self.schedule]
+        for phase, value in ((GraspPhase.LIFT, rise), (GraspPhase.HOLD, np.full(len(times), LIFT_HEIGHT_M)),
                              (GraspPhase.PLACE, LIFT_HEIGHT_M - rise)):
-            chosen = np.array([p is phase for p in phases])
+            chosen = index == scheduled.index(phase) if phase in scheduled else np.zeros(len(times), dtype=bool)
             height[chosen] = value[chosen]
         return height
 
     def _touches_table(self) -> bool:
-        if self.data.ncon == 0:
-            return False
-        pairs = np.sort(self.data.contact.geom, axis=1)
-        return bool(np.any((pairs[:, 0] == min(self.table_geom, self.object_geom))
-                           & (pairs[:, 1] == max(self.table_geom, self.object_geom))))
+        return bool(self.data.sensordata[self.table_sensor] > 0.0)
 
     def run(self) -> TrialResult:
         """Run the sequence; return the verdicts and a 100 Hz trace.
@@ -195,27 +201,20 @@ class GraspWorld:
         return self._touches_table() or record[K.R_HEIGHT] < TABLE_CLEARANCE_M
 
     def _compiled_loop(self, phases, lift, held, records, signals, hold_phase) -> bool:
-        """The incipient-slip loop in compiled code (``_fused.run_frames``): runs of frames in one call, each hold
-        frame on its own until the object is found dropped. Returns whether it was."""
+        """The incipient-slip loop in compiled code (``_fused.run_frames``), the whole trial in one call. Returns
+        whether the object was found dropped."""
         controls = len(phases) // len(records)
-        codes = np.array([PHASE_CODES[phase] for phase in phases], dtype=np.int64)
+        codes = np.array([PHASE_CODES[phase] for _, phase in self.schedule], dtype=np.int64)[self._phase_index(
+            np.arange(len(phases)) / self.grasp.parameters.sample_rate_hz)]
         constant = math.nan if self.settings.constant_force is None else float(self.settings.constant_force)
         count, sensing = len(self.tip.centres), self.sensing
         buffers = F.frame_buffers(count, sensing.operator.shape[0])
-        ratio_noise, loaded = np.zeros((2, count)), np.zeros((2, count), dtype=np.bool_)
-        inputs = (sensing.compiled_inputs(), buffers, ratio_noise, loaded, self.grasp.state.arrays(), codes, constant,
-                  lift, np.zeros(controls), held, self.bridge.compiled_inputs(self.model, self.data),
-                  mujoco_step_function(), self._grasp_local_m, records, signals)
-        frames, frame, dropped = len(records), 0, False
-        while frame < frames:
-            checked = hold_phase[frame] and not dropped
-            stop = frame + 1
-            while not checked and stop < frames and not hold_phase[stop]:
-                stop += 1
-            F.run_frames(frame, stop, sensing.frame_noise(stop - frame), *inputs)
-            if checked:
-                dropped = self._dropped(records[frame])
-            frame = stop
+        dropped = F.run_frames(
+            0, len(records), sensing.frame_noise(len(records)), sensing.compiled_inputs(), buffers,
+            np.zeros((2, count)), np.zeros((2, count), dtype=np.bool_), self.grasp.state.arrays(), codes, constant,
+            lift, np.zeros(controls), held, self.bridge.compiled_inputs(self.model, self.data), mujoco_step_function(),
+            self._grasp_local_m, records, signals, hold_phase, self.data.sensordata, self.table_sensor,
+            TABLE_CLEARANCE_M)
         self.grasp.collect_events(signals)
         return dropped
 
