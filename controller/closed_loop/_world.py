@@ -263,9 +263,8 @@ class GraspWorld:
         result.max_rotation_mrad = 1e3 * float(np.abs(records[lifted, K.R_ROTATION]).max(initial=0.0))
         result.crushed = force_peak > self.obj.crush_force
         result.minimum_force = float(self.grasp.minimum_force) if self.grasp.minimum_force is not None else math.nan
-        if isinstance(self.grasp, _IncipientSlip):
-            result.friction_estimate = float(self.grasp.controller.friction_estimate)
-            result.slip_events = list(self.grasp.controller.slip_events)
+        result.friction_estimate = float(self.grasp.friction_estimate)
+        result.slip_events = list(self.grasp.slip_events)
         holding = np.array([phase is GraspPhase.HOLD for phase in phases])
         if holding.any():
             hold = np.column_stack([times, records[:, K.R_GRIP_FORCE], records[:, K.R_RELATIVE_X:K.R_RELATIVE_Z + 1],
@@ -291,6 +290,7 @@ class _DisplacementLaw:
     """The displacement-target law behind the same two calls as the incipient-slip controller."""
 
     friction_estimate = math.nan                       # the law assumes its design friction; it measures none
+    slip_events = ()
 
     def __init__(self, controller: GraspForceController):
         self.controller, self.parameters = controller, controller.parameters
@@ -312,7 +312,7 @@ class _IncipientSlip:
 
     def __init__(self, controller: IncipientSlipController):
         self.parameters = controller.parameters
-        self.state = self.controller = SlipControllerState(controller)
+        self.state = SlipControllerState(controller)
 
     @property
     def minimum_force(self):
@@ -321,6 +321,10 @@ class _IncipientSlip:
     @property
     def friction_estimate(self) -> float:
         return self.state.friction_estimate
+
+    @property
+    def slip_events(self) -> list:
+        return self.state.slip_events
 
     def collect_events(self, signals) -> None:
         """The slip events the compiled loop marked in ``signals`` ((time [s], mu_hat) per detection)."""

@@ -1,0 +1,122 @@
+"""The compiled frame loop of the closed loop (controller.closed_loop._fused, controller._slip_frame) against the
+Python loop and the reference IncipientSlipController it replaces, on recorded trials."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from controller import GraspPhase
+from controller._slip_frame import SlipControllerState
+from controller.closed_loop import TABLE_I_OBJECTS, GraspWorld, TrialSettings
+from controller.incipient_slip import IncipientSlipController, IncipientSlipParameters
+
+# the same arithmetic compiled and interpreted (numba does not reorder floating point without fastmath): the two
+# agree to round-off; 1e-9 leaves room for a summation order and still catches any difference of the law
+SAME = 1e-9
+# eclair at mu = 0.6: the probe finds a slip at 4.78 s (hold from 3.2 s), then place and release
+SETTINGS = TrialSettings(friction_coefficient=0.6, hold_time=2.0, seed=3)
+
+
+class _Reference:
+    """The reference controller in the Python frame loop, recording what it was given and what it answered."""
+
+    def __init__(self, controller: IncipientSlipController):
+        self.controller, self.parameters = controller, controller.parameters
+        self.frames, self.phases, self.commands = [], [], []
+
+    @property
+    def minimum_force(self):
+        return self.controller.minimum_force
+
+    @property
+    def friction_estimate(self):
+        return self.controller.friction_estimate
+
+    @property
+    def slip_events(self):
+        return self.controller.slip_events
+
+    def observe(self, frame) -> None:
+        self.frames.append((frame.normal_force.copy(), frame.load_ratio.copy(), frame.loaded.copy(),
+                            frame.ratio_noise.copy()))
+        self.controller.observe(frame.normal_force, frame.load_ratio, frame.loaded, frame.ratio_noise)
+
+    def step(self, phase) -> float:
+        self.phases.append(phase)
+        self.commands.append(self.controller.step(phase))
+        return self.commands[-1]
+
+
+def _python_trial(settings):
+    """A trial through the Python frame loop with the reference controller."""
+    world = GraspWorld(TABLE_I_OBJECTS["eclair"], settings)
+    reference = _Reference(IncipientSlipController(world.grasp.parameters, world.tip.centres))
+    world.grasp = reference
+    return world.run(), reference
+
+
+@pytest.fixture(scope="module")
+def recorded():
+    return _python_trial(SETTINGS)
+
+
+def test_compiled_controller_reproduces_the_reference_on_a_recorded_trial(recorded):
+    _, reference = recorded
+    parameters = reference.parameters
+    phases = set(reference.phases)
+    # the recording exercises the whole law: every phase, the minimum-force latch, the watch and a detection
+    assert phases == set(GraspPhase) and reference.minimum_force is not None and reference.slip_events
+    compiled = SlipControllerState(IncipientSlipController(parameters, reference.controller.centres))
+    controls = len(reference.phases) // len(reference.frames)
+    commands = []
+    for index, frame in enumerate(reference.frames):
+        compiled.observe(*frame)
+        commands.extend(compiled.step(phase) for phase in reference.phases[index * controls:(index + 1) * controls])
+    np.testing.assert_allclose(commands, reference.commands, rtol=SAME, atol=SAME * parameters.maximum_force)
+    assert compiled.minimum_force == pytest.approx(reference.minimum_force, rel=SAME)
+    assert compiled.friction_estimate == pytest.approx(reference.friction_estimate, rel=SAME)
+    assert np.allclose(compiled.slip_events, reference.slip_events, rtol=SAME)
+
+
+def test_compiled_controller_starts_from_a_new_controller():
+    controller = IncipientSlipController(IncipientSlipParameters(), np.zeros((1, 2)) + [[1.0, 0.0]])
+    controller.step(GraspPhase.APPROACH)
+    with pytest.raises(ValueError, match="has not observed or stepped"):
+        SlipControllerState(controller)
+
+
+@pytest.mark.parametrize("constant_force", [None, 2.5])
+def test_fused_loop_is_the_python_loop(recorded, constant_force):
+    """Sensing, controller and physics in one compiled call: the same trace as the Python loop on the same seed
+    (the node noise drawn for the whole trial at once is the same stream as frame by frame)."""
+    python = recorded[0] if constant_force is None else _python_trial(replace(SETTINGS,
+                                                                              constant_force=constant_force))[0]
+    compiled = GraspWorld(TABLE_I_OBJECTS["eclair"], replace(SETTINGS, constant_force=constant_force)).run()
+    for key in ("force_command", "grip_force", "shear_displacement", "twist_angle", "slip_x_mm", "rotation",
+                "friction_estimate", "object_height_m"):
+        scale = np.abs(python.trace[key]).max()
+        np.testing.assert_allclose(compiled.trace[key], python.trace[key], rtol=SAME, atol=SAME * scale, err_msg=key)
+    assert compiled.trace["phase"] == python.trace["phase"]
+    assert (compiled.success, compiled.dropped, compiled.crushed) == (python.success, python.dropped, python.crushed)
+    assert np.allclose(compiled.slip_events, python.slip_events, rtol=SAME)
+    assert compiled.minimum_force == pytest.approx(python.minimum_force, rel=SAME)
+
+
+def test_table_contact_sensor_is_the_contact_list():
+    """The hold's drop check reads MuJoCo's contact sensor (object-table contacts found in the last step): the same
+    verdict as scanning data.contact, with the object resting, lifted off by an applied force and landing again."""
+    import mujoco
+
+    world = GraspWorld(TABLE_I_OBJECTS["eclair"], SETTINGS)
+    model, data = world.model, world.data
+    pair = {world.model.geom("table").id, world.model.geom("object").id}
+    weight = TABLE_I_OBJECTS["eclair"].mass * 9.81
+    seen = set()
+    for step in range(1500):
+        data.xfrc_applied[world.object_body, 2] = 1.5 * weight if step < 500 else 0.0
+        mujoco.mj_step(model, data)
+        scanned = any({contact.geom1, contact.geom2} == pair for contact in data.contact)
+        assert world._touches_table() == scanned
+        seen.add(scanned)
+    assert seen == {True, False}
