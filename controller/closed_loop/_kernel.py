@@ -101,21 +101,35 @@ def _to_world(rotation, x, y, z):
 
 
 @njit(cache=True)
+def _fixed_offsets(geometry, arm, position, rotation, fixed):
+    """What the sub-steps of one physics step share (the fingers close along y only, the object is held): each bump
+    tip's offset from the object along x and z [mm] and their products with R's rows, into ``fixed`` (2 k, 8), so
+    that ``_normal_forces`` forms R^T offset with the same operations in the same order as ``_to_local``."""
+    for i in range(geometry.shape[0]):
+        offset_x = arm[0] + geometry[i, G_OFFSET] - position[0]
+        offset_z = arm[2] + geometry[i, G_OFFSET + 2] - position[2]
+        fixed[i, 0], fixed[i, 1] = offset_x, offset_z
+        for axis in range(3):
+            fixed[i, 2 + 2 * axis] = rotation[0, axis] * offset_x
+            fixed[i, 3 + 2 * axis] = rotation[2, axis] * offset_z
+
+
+@njit(cache=True)
 def _normal_forces(config, geometry, bumps, arm, closing_mm, closing_rate_mm, position, rotation, velocity, spin,
-                   forces):
-    """Normal force of every bump tip [N] into ``forces`` (2 k,) and its depth [mm] into ``bumps``."""
+                   forces, fixed):
+    """Normal force of every bump tip [N] into ``forces`` (2 k,) and its depth [mm] into ``bumps``; ``fixed`` from
+    ``_fixed_offsets``."""
     count = geometry.shape[0] // 2
     k_n, damping = config[C_NORMAL_STIFFNESS], config[C_DAMPING_TIME]
     half_x, half_y, half_z = config[C_HALF_X], config[C_HALF_Y], config[C_HALF_Z]
     for i in range(geometry.shape[0]):
         side = 2 * (i // count) - 1                                            # -1 left, +1 right
-        offset_x = arm[0] + geometry[i, G_OFFSET] - position[0]
+        offset_x, offset_z = fixed[i, 0], fixed[i, 1]
         offset_y = arm[1] + side * (config[C_FINGER_OFFSET] - closing_mm) + geometry[i, G_OFFSET + 1] - position[1]
-        offset_z = arm[2] + geometry[i, G_OFFSET + 2] - position[2]
-        local_x, local_y, local_z = _to_local(rotation, offset_x, offset_y, offset_z)
         face = geometry[i, G_FACE]
-        depth = half_y + face * local_y
-        if not (depth > 0.0 and abs(local_x) <= half_x and abs(local_z) <= half_z):
+        depth = half_y + face * (fixed[i, 4] + rotation[1, 1] * offset_y + fixed[i, 5])       # R^T offset, y
+        if not (depth > 0.0 and abs(fixed[i, 2] + rotation[1, 0] * offset_y + fixed[i, 3]) <= half_x
+                and abs(fixed[i, 6] + rotation[1, 2] * offset_y + fixed[i, 7]) <= half_z):
             bumps[i, B_DEPTH] = 0.0
             forces[i] = 0.0
             continue
@@ -153,11 +167,13 @@ def physics_step(config, geometry, state, bumps, out, xpos, xmat, xipos, qvel, x
     radius = config[C_ARM_RADIUS]
     forces = np.zeros(count)
     mean = np.zeros(count)
+    fixed = np.empty((count, 8))
+    _fixed_offsets(geometry, arm, position, rotation, fixed)
     for substep in range(substeps):                                            # 1. gripper at the actuator rate
         force_command = force_commands[substep * force_commands.size // substeps]
         closing_mm = state[S_CLOSING] * MM
         _normal_forces(config, geometry, bumps, arm, closing_mm, state[S_CLOSING_RATE] * MM, position, rotation,
-                       velocity, spin, forces)
+                       velocity, spin, forces, fixed)
         left, right = forces[:half_count].sum(), forces[half_count:].sum()
         grip = 0.5 * (left + right)                                            # N per finger
         torque = acceleration_step(state, config, force_command, grip, closing_mm / radius, period)

@@ -70,16 +70,18 @@ def rigid_fit(reference, current, used):
 def reference_at(force, table_force, table_cop, reference):
     """Unsheared CoP (k, 2) [mm] of each bump interpolated in log force on the bench table (n,) / (n, k, 2)."""
     last = table_force.size - 1
+    logarithm = np.empty(table_force.size)                   # the table's log forces, once per call
+    for entry in range(table_force.size):
+        logarithm[entry] = math.log(table_force[entry])
     for bump in range(force.size):
         value = math.log(max(force[bump], table_force[0]))
-        if value >= math.log(table_force[last]):
+        if value >= logarithm[last]:
             lower, weight = last - 1, 1.0
         else:
             lower = 0
-            while math.log(table_force[lower + 1]) <= value:
+            while logarithm[lower + 1] <= value:
                 lower += 1
-            weight = (value - math.log(table_force[lower])) / (math.log(table_force[lower + 1])
-                                                                 - math.log(table_force[lower]))
+            weight = (value - logarithm[lower]) / (logarithm[lower + 1] - logarithm[lower])
         for axis in range(2):
             reference[bump, axis] = ((1.0 - weight) * table_cop[lower, bump, axis]
                                      + weight * table_cop[lower + 1, bump, axis])
