@@ -135,18 +135,12 @@ class GraspWorld:
         ends = np.array([end for end, _ in self.schedule])
         return np.minimum(np.searchsorted(ends, times, side="right"), len(ends) - 1)
 
-    def _phases(self, times):
-        """Phase (list of GraspPhase) and progress through it (array) at each of ``times`` [s] (the last phase's
-        end and beyond count as its end)."""
+    def _lift_heights_m(self, times) -> np.ndarray:
+        """Lift target [m] at ``times`` [s]: a minimum-jerk rise in LIFT, held in HOLD, lowered in PLACE."""
         ends = np.array([end for end, _ in self.schedule])
         starts = np.concatenate([[0.0], ends[:-1]])
         index = self._phase_index(times)
         progress = np.clip((times - starts[index]) / (ends[index] - starts[index]), 0.0, 1.0)
-        return [self.schedule[i][1] for i in index], progress
-
-    def _lift_heights_m(self, times) -> np.ndarray:
-        """Lift target [m] at ``times`` [s]: a minimum-jerk rise in LIFT, held in HOLD, lowered in PLACE."""
-        progress, index = self._phases(times)[1], self._phase_index(times)
         rise = LIFT_HEIGHT_M * progress**3 * (10.0 - 15.0 * progress + 6.0 * progress**2)
         height = np.zeros(len(times))
         scheduled = [phase for _, phase in self.schedule]
@@ -175,11 +169,11 @@ class GraspWorld:
         self._grasp_local_m = rotation0.T @ (np.array([0.0, 0.0, data.xpos[self.arm_body][2]])
                                              - data.xpos[self.object_body])
         frames = int(round(self.schedule[-1][0] * sensor_rate))
-        phases = self._phases(np.arange(frames * controls) / control_rate)[0]
+        phases = self._phase_index(np.arange(frames * controls) / control_rate)     # schedule index per control step
         lift = self._lift_heights_m(np.arange(frames * per_frame) / physics_rate)
         records = np.zeros((frames, K.R_SIZE))
         signals = np.full((frames, F.F_SIZE), math.nan)          # command, u_x, theta, mu_hat, slip events
-        frame_phases = phases[::controls][:frames]                           # the phase at each sensor frame
+        frame_phases = [self.schedule[i][1] for i in phases[::controls][:frames]]      # the phase of each frame
         hold_phase = np.array([phase is GraspPhase.HOLD for phase in frame_phases])
         # control steps per physics step: the commands of a frame's physics steps (one held over several steps when
         # the physics runs faster than the controller)
@@ -201,11 +195,10 @@ class GraspWorld:
         return self._touches_table() or record[K.R_HEIGHT] < TABLE_CLEARANCE_M
 
     def _compiled_loop(self, phases, lift, held, records, signals, hold_phase) -> bool:
-        """The incipient-slip loop in compiled code (``_fused.run_frames``), the whole trial in one call. Returns
-        whether the object was found dropped."""
+        """The incipient-slip loop in compiled code (``_fused.run_frames``), the whole trial in one call; ``phases``
+        the schedule index of each control step. Returns whether the object was found dropped."""
         controls = len(phases) // len(records)
-        codes = np.array([PHASE_CODES[phase] for _, phase in self.schedule], dtype=np.int64)[self._phase_index(
-            np.arange(len(phases)) / self.grasp.parameters.sample_rate_hz)]
+        codes = np.array([PHASE_CODES[phase] for _, phase in self.schedule], dtype=np.int64)[phases]
         constant = math.nan if self.settings.constant_force is None else float(self.settings.constant_force)
         count, sensing = len(self.tip.centres), self.sensing
         buffers = F.frame_buffers(count, sensing.operator.shape[0])
@@ -224,6 +217,7 @@ class GraspWorld:
         was found dropped."""
         frames, per_frame = len(records), held.shape[0]
         controls = len(phases) // frames
+        phases = [self.schedule[i][1] for i in phases]
         constant = self.settings.constant_force
         bridge, grasp, sensing = self.bridge, self.grasp, self.sensing
         commands, command, dropped = np.zeros(controls), 0.0, False
