@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from fem.compiled import njit_cached
 
 from ._slip_kernels import fingertip_need, low_pass_frame, slip_signature
 from .incipient_slip import FULL_SEARCH_EVERY, NOISE_MARGIN, IncipientSlipController
@@ -119,33 +119,33 @@ class SlipControllerState:
         return float(self.scalars[X_NEED])
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _first_min(a, b):
     """Python's min(a, b): b only if it is strictly smaller."""
     return b if b < a else a
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _first_max(a, b):
     """Python's max(a, b): b only if it is strictly larger."""
     return b if b > a else a
 
 
-@njit(cache=True)
+@njit_cached
 def _start_watch(scalars, plateau, streak):
     plateau[0] = plateau[1] = -1.0
     scalars[X_HISTORY] = 0.0
     streak[:] = 0
 
 
-@njit(cache=True)
+@njit_cached
 def _target(parameters, scalars):
     probing_or_seen = scalars[X_SLIP_SEEN] > 0.0 or scalars[X_PROBING] > 0.0
     fraction = parameters[P_SAFETY] if probing_or_seen else parameters[P_LIFT_SAFETY]
     return scalars[X_NEED] / (fraction * scalars[X_FRICTION])
 
 
-@njit(cache=True)
+@njit_cached
 def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, centres, second_frame, scalars,
                   contact, signals, ratios, plateau, history_force, history_ratios, streak, slip_centre):
     """``IncipientSlipController.observe`` on the state arrays: bump forces (2, k) [N], load ratios (2, k, 2) [-],
@@ -206,14 +206,14 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
     return True
 
 
-@njit(cache=True)
+@njit_cached
 def _latch_minimum(scalars):
     if math.isnan(scalars[X_MINIMUM]) and scalars[X_CONTACTS] >= 2:
         scalars[X_MINIMUM] = scalars[X_COMMAND]
     return not math.isnan(scalars[X_MINIMUM])
 
 
-@njit(cache=True)
+@njit_cached
 def control_step(parameters, scalars, plateau, streak, phase):
     """``IncipientSlipController.step`` on the state arrays, ``phase`` a ``PHASE_CODES`` value -> command [N]."""
     period = parameters[P_PERIOD]
@@ -247,7 +247,7 @@ def control_step(parameters, scalars, plateau, streak, phase):
     return scalars[X_COMMAND]
 
 
-@njit(cache=True)
+@njit_cached
 def _hold_step(parameters, scalars, period):
     """Start the watch one window before the probe delay; probe (raise mu_hat) until a slip is seen."""
     scalars[X_HOLD_TIME] += period

@@ -10,11 +10,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from fem.compiled import njit_cached
 
 __all__ = ["array_margin", "fingertip_need", "slip_signature", "low_pass_frame"]
 
-@njit(cache=True)
+@njit_cached
 def array_margin(centres, bump_force, load, torque, friction, start_x=0.0, start_y=0.0, first_step=-1.0,
                  levels=14):
     """Slip margin lambda* [-] of an array of Coulomb point contacts, and the rotation centre (x, y) [mm] of its
@@ -59,7 +59,7 @@ def array_margin(centres, bump_force, load, torque, friction, start_x=0.0, start
     return best, best_x, best_y
 
 
-@njit(cache=True)
+@njit_cached
 def fingertip_need(centres, force, ratio, contact, rotational, slip_centre, full_search, warm_step):
     """F / lambda*(mu = 1) [N] of the more loaded fingertip (the module docstring's demand at mu = 1); without
     rotational detection |F_t| of that fingertip. ``slip_centre`` (2, 2) [mm] holds each fingertip's last slip
@@ -92,7 +92,7 @@ def fingertip_need(centres, force, ratio, contact, rotational, slip_centre, full
     return used.sum() / margin if margin > 0.0 else math.inf
 
 
-@njit(cache=True)
+@njit_cached
 def slip_signature(force, ratio, contact, force_then, ratios_then, judged, plateau, second_frame, hold_ratio,
                    total_drop, force_drop, stick_exponent, loaded_share, force_share, noise):
     """The slip watch's tests on one frame (the module docstring).
@@ -147,7 +147,7 @@ def slip_signature(force, ratio, contact, force_then, ratios_then, judged, plate
     return signature, total_ratio, bearing, ratios
 
 
-@njit(cache=True)
+@njit_cached
 def low_pass_frame(gain, force, ratio, contact, previous_force, previous_ratio, output_force, output_ratio,
                    restart):
     """One step of the first-order Tustin low-pass y_k = b (x_k + x_{k-1}) + (1 - 2 b) y_{k-1} (``filters``) on the

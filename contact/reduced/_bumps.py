@@ -21,7 +21,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
+from fem.compiled import njit_cached
 
 from contact.theory import LUBKIN_SLIP_TORQUE_RATIO, lubkin_torque_twist
 
@@ -136,7 +136,7 @@ def bump_response(normal_force, shear_displacement, twist, friction, parameters:
         sliding=sliding, limit_displacement=pair(8), limit_twist=out[11].reshape(shape))
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _interpolate(value, grid, values):
     """np.interp(value, grid, values) for an increasing grid, by bisection (numba's np.interp scans linearly)."""
     if value <= grid[0]:
@@ -155,7 +155,7 @@ def _interpolate(value, grid, values):
     return values[low] + weight * (values[high] - values[low])
 
 
-@njit(cache=True)
+@njit_cached
 def bump_law(force, shear_x, shear_y, twist, friction, radius_coefficient, tangential_modulus, torsional_modulus):
     """One bump: the law of ``bump_response`` for scalars (compiled; the closed loop calls it at every step).
 
@@ -199,7 +199,7 @@ def bump_law(force, shear_x, shear_y, twist, friction, radius_coefficient, tange
             stick_rotational, elastic_twist)
 
 
-@njit(cache=True)
+@njit_cached
 def _bump_laws(force, shear_x, shear_y, twist, friction, radius_coefficient, tangential_modulus, torsional_modulus):
     """``bump_law`` over flat arrays (n,): rows (12, n) in its return order."""
     out = np.zeros((12, force.size))

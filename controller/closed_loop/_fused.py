@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from fem.compiled import njit_cached
 
 from controller._slip_frame import APPROACH, RELEASE, X_FRICTION, X_TIME, control_step, observe_frame
 
@@ -33,7 +33,7 @@ def frame_buffers(count: int, nodes: int) -> tuple:
             np.zeros((2, 4)))
 
 
-@njit(cache=True)
+@njit_cached
 def _frame_loads(sensing, buffers, noise, out, ratio_noise):
     """One sensor frame of the bumps' states in ``out`` (2 k, O_SIZE): the readings' per-bump loads into
     ``buffers`` and each load ratio's noise (2, k) [-] (``SensingChain.sense``); returns (u_x, theta)."""
@@ -61,7 +61,7 @@ def _frame_loads(sensing, buffers, noise, out, ratio_noise):
     return u_x, theta
 
 
-@njit(cache=True)
+@njit_cached
 def run_frames(first, stop, noise, sensing, buffers, ratio_noise, loaded, controller, phases, constant, lift,
                commands, held, physics, mj_step, grasp_local, records, signals, hold, sensordata, table_sensor,
                clearance):

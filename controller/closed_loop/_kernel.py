@@ -33,7 +33,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from fem.compiled import njit_cached
 
 from contact.reduced import bump_law
 
@@ -59,7 +59,7 @@ B_ANCHOR, B_ANGLE, B_TOUCHING, B_DEPTH, B_SIZE = 0, 3, 4, 5, 6
 S_TWIST, S_APPLIED, S_SIZE = 13, 19, 25                        # previous object twist (6), applied wrench (6)
 
 
-@njit(cache=True)
+@njit_cached
 def acceleration_step(state, config, force_command, measured_force, angle, period):
     """Acceleration Control with DOB (``controller.acceleration_control``) on the state vector; torque [N mm]."""
     velocity = (angle - state[S_ANGLE_1]) / period
@@ -79,12 +79,12 @@ def acceleration_step(state, config, force_command, measured_force, angle, perio
     return torque
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _cross(ax, ay, az, bx, by, bz):
     return ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _to_local(rotation, x, y, z):
     """R^T (x, y, z): world vector in object coordinates."""
     return (rotation[0, 0] * x + rotation[1, 0] * y + rotation[2, 0] * z,
@@ -92,7 +92,7 @@ def _to_local(rotation, x, y, z):
             rotation[0, 2] * x + rotation[1, 2] * y + rotation[2, 2] * z)
 
 
-@njit(cache=True, inline="always")
+@njit_cached(inline="always")
 def _to_world(rotation, x, y, z):
     """R (x, y, z): object vector in world coordinates."""
     return (rotation[0, 0] * x + rotation[0, 1] * y + rotation[0, 2] * z,
@@ -100,7 +100,7 @@ def _to_world(rotation, x, y, z):
             rotation[2, 0] * x + rotation[2, 1] * y + rotation[2, 2] * z)
 
 
-@njit(cache=True)
+@njit_cached
 def _fixed_offsets(geometry, arm, position, rotation, fixed):
     """What the sub-steps of one physics step share (the fingers close along y only, the object is held): each bump
     tip's offset from the object along x and z [mm] and their products with R's rows, into ``fixed`` (2 k, 8), so
@@ -114,7 +114,7 @@ def _fixed_offsets(geometry, arm, position, rotation, fixed):
             fixed[i, 3 + 2 * axis] = rotation[2, axis] * offset_z
 
 
-@njit(cache=True)
+@njit_cached
 def _normal_forces(config, geometry, bumps, arm, closing_mm, closing_rate_mm, position, rotation, velocity, spin,
                    forces, fixed):
     """Normal force of every bump tip [N] into ``forces`` (2 k,) and its depth [mm] into ``bumps``; ``fixed`` from
@@ -141,7 +141,7 @@ def _normal_forces(config, geometry, bumps, arm, closing_mm, closing_rate_mm, po
         forces[i] = max(k_n * depth * root + damping * 1.5 * k_n * root * rate, 0.0)
 
 
-@njit(cache=True)
+@njit_cached
 def physics_step(config, geometry, state, bumps, out, xpos, xmat, xipos, qvel, xfrc_applied, mocap_pos,
                  force_commands):
     """Advance the gripper and the contact by one physics step (module docstring); write xfrc_applied, mocap_pos.
@@ -277,7 +277,7 @@ def physics_step(config, geometry, state, bumps, out, xpos, xmat, xipos, qvel, x
         xfrc_applied[arm_body, a] = -wrench[a] if a < 3 else 0.0
 
 
-@njit(cache=True)
+@njit_cached
 def _add_row(stiffness, viscosity, row, direction, lever_x, lever_y, lever_z, spring, damper):
     """Add k row^T row and c row^T row for a point contact along ``direction`` at ``lever`` [m] (row = [n, r x n])."""
     row[0], row[1], row[2] = direction[0], direction[1], direction[2]
@@ -289,7 +289,7 @@ def _add_row(stiffness, viscosity, row, direction, lever_x, lever_y, lever_z, sp
             viscosity[a, b] += damper * product
 
 
-@njit(cache=True)
+@njit_cached
 def _implicit_wrench(config, state, rotation, velocity, spin, wrench, stiffness, viscosity, step):
     """Replace ``wrench`` by the one that makes MuJoCo's explicit step the backward-Euler step of the contact
     (module docstring); the 6 x 6 system is symmetric positive definite: Cholesky by hand, no allocation per call
@@ -332,7 +332,7 @@ def _implicit_wrench(config, state, rotation, velocity, spin, wrench, stiffness,
     state[S_HAVE_PREVIOUS] = 1.0
 
 
-@njit(cache=True)
+@njit_cached
 def _cholesky_solve(matrix, right):
     """Solve A x = b for a small symmetric positive definite A (overwritten by its factor)."""
     size = matrix.shape[0]
@@ -362,7 +362,7 @@ def _cholesky_solve(matrix, right):
 (R_GRIP_FORCE, R_HEIGHT, R_RELATIVE_X, R_RELATIVE_Y, R_RELATIVE_Z, R_ROTATION, R_SLIDING, R_SIZE) = range(8)
 
 
-@njit(cache=True)
+@njit_cached
 def run_block(commands, lift_targets, config, geometry, state, bumps, out, xpos, xmat, xipos, qvel, xfrc_applied,
               mocap_pos, ctrl, model_address, data_address, mj_step, grasp_local, record):
     """``len(commands)`` physics steps: contact step with commands[j] (m,) [N], lift target [m], then MuJoCo's step;

@@ -11,10 +11,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from fem.compiled import njit_cached
 
 
-@njit(cache=True)
+@njit_cached
 def bump_forces_and_cops(readings, region, node_x, node_y, floor, centres, force, cop):
     """Per-bump force [N] (k,) and CoP [mm] (k, 2) of one frame (n_nodes,): readings above ``floor`` summed over
     each bump's nodes (``region[n]`` = bump of node n, -1 for none); a bump with no force gets its centre."""
@@ -36,7 +36,7 @@ def bump_forces_and_cops(readings, region, node_x, node_y, floor, centres, force
             cop[bump, 0], cop[bump, 1] = centres[bump, 0], centres[bump, 1]
 
 
-@njit(cache=True)
+@njit_cached
 def rigid_fit(reference, current, used):
     """Least-squares rotation [rad] and translation [mm] mapping ``reference`` (k, 2) onto ``current`` (k, 2) over
     the ``used`` bumps: (count, rotation, t_x, t_y); zeros when fewer than two bumps are used."""
@@ -66,7 +66,7 @@ def rigid_fit(reference, current, used):
             current_y - (sin * reference_x + cos * reference_y))
 
 
-@njit(cache=True)
+@njit_cached
 def reference_at(force, table_force, table_cop, reference):
     """Unsheared CoP (k, 2) [mm] of each bump interpolated in log force on the bench table (n,) / (n, k, 2)."""
     last = table_force.size - 1
@@ -87,7 +87,7 @@ def reference_at(force, table_force, table_cop, reference):
                                      + weight * table_cop[lower + 1, bump, axis])
 
 
-@njit(cache=True)
+@njit_cached
 def estimate_frame(readings, region, node_x, node_y, node_floor, threshold, centres, table_force, table_cop,
                    cop_gain_to_shear, force, shift, fit):
     """The paper's estimator on one frame of both fingertips' readings (2, n_nodes) [N]: per-bump force (2, k)
@@ -111,7 +111,7 @@ def estimate_frame(readings, region, node_x, node_y, node_floor, threshold, cent
         fit[f, 0], fit[f, 1], fit[f, 2], fit[f, 3] = number, rotation, t_x, t_y
 
 
-@njit(cache=True)
+@njit_cached
 def couple_arm(bump_force, arm, slope, limit):
     """h(P) [mm] of ``ReducedParameters.couple_arm_at``: limit + (arm - limit) / (1 + slope P / (arm - limit))."""
     if slope == 0.0:
@@ -120,7 +120,7 @@ def couple_arm(bump_force, arm, slope, limit):
     return limit + excess / (1.0 + (slope / excess) * max(bump_force, 0.0))
 
 
-@njit(cache=True)
+@njit_cached
 def sense_loads(normal, shear, tangential, noise, couple_law, operator, inverse, offset, quantization, threshold,
                 readings, load_force, load_ratio):
     """Readings of both fingertips and the per-bump loads read back from them (``SensingChain.sense``).
@@ -162,7 +162,7 @@ def sense_loads(normal, shear, tangential, noise, couple_law, operator, inverse,
                 load_ratio[f, i, 0] = load_ratio[f, i, 1] = 0.0
 
 
-@njit(cache=True)
+@njit_cached
 def sense_frame(normal, shear, tangential, noise, couple_law, operator, inverse, offset, quantization, threshold,
                 region, node_x, node_y, node_floor, centres, table_force, table_cop, cop_gain_to_shear, readings,
                 load_force, load_ratio, force, shift, fit):

@@ -160,7 +160,7 @@ class GraspWorld:
         first and the frame's physics steps then run in compiled code (``ContactBridge.run``), each physics step
         with the commands of the control steps it spans (or the one it lies in).
         """
-        mujoco, model, data, s = self.mujoco, self.model, self.data, self.settings
+        mujoco, data, s = self.mujoco, self.data, self.settings
         physics_rate, control_rate = s.physics_rate_hz, self.grasp.parameters.sample_rate_hz
         sensor_rate = self.sensing.array.sample_rate_hz
         per_frame = int(round(physics_rate / sensor_rate))                  # physics steps per sensor frame
