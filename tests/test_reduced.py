@@ -79,6 +79,20 @@ def test_array_torque_limit_is_bumps_friction_about_the_centre():
     assert with_load < margin
 
 
+@pytest.mark.parametrize("tangential, torque", [((0.5, 0.0), 0.0), ((0.0, 0.3), 25.0), ((0.0, 0.0), 40.0)])
+def test_minimum_normal_force_is_where_the_margin_crosses_one(tangential, torque):
+    # the force found carries the load and 1e-4 less does not (the tolerance asked for), whatever the mode
+    tolerance = 1e-4
+    force = TIP.minimum_normal_force(tangential, torque, MU, tolerance=tolerance)
+
+    def margin(total):
+        bump_force = np.full(9, total / 9)
+        radius = TIP.parameters.radius_coefficient * np.cbrt(bump_force)
+        return TIP.slip_margin(bump_force, radius, MU, tangential, torque)[0]
+
+    assert margin(force) >= 1.0 > margin(force * (1.0 - 2 * tolerance))
+
+
 def test_base_pressure_carries_the_normal_force():
     state = TIP.load_state(P, (1.0, 0.5), 20.0, MU, tilt=(0.01, -0.005))
     grid = TIP.base_grid()
