@@ -61,9 +61,10 @@ def run_trial_table(path: Path, jobs: list[tuple[str, object, object, dict]], ro
                     function: Callable | None = None) -> list[dict]:
     """Run the jobs (key, object, settings, info) not yet in the CSV at ``path``; return every job's row.
 
-    Each job is ``function(object, settings)`` (default: one trial, ``run_trial``) in a process pool;
-    ``row(value, info)`` turns its value into the CSV row (the key is added). Rows read back from an earlier run
-    pass through ``coerce`` (numbers and booleans from the CSV's strings).
+    Each job is ``function(object, settings)`` (default: one trial, ``run_trial``) in a process pool, beside the
+    reduced model's slip limit ``required_grip_force`` at the trial's friction [N], which ``row(value, info)`` finds
+    as ``info["required"]`` when it turns the value into the CSV row (the key is added). Rows read back from an
+    earlier run pass through ``coerce`` (numbers and booleans from the CSV's strings).
     """
     from controller.closed_loop import map_trials, run_trial
 
@@ -72,13 +73,20 @@ def run_trial_table(path: Path, jobs: list[tuple[str, object, object, dict]], ro
     rows = {key: coerce(done[key]) for key in keys if key in done}
     missing = [job for job in jobs if job[0] not in rows]
     if missing:
-        results = map_trials(function or run_trial, [(obj, settings) for _, obj, settings, _ in missing], processes,
-                             progress=label)
-        for index, result in results:
+        results = map_trials(functools.partial(_with_required_force, function or run_trial),
+                             [(obj, settings) for _, obj, settings, _ in missing], processes, progress=label)
+        for index, (result, required) in results:
             key, _, _, info = missing[index]
-            rows[key] = {"key": key, **row(result, info)}
+            rows[key] = {"key": key, **row(result, {**info, "required": required})}
             write_csv_atomic(path, [rows[k] for k in keys if k in rows])     # after every trial: nothing is lost
     return [rows[key] for key in keys]
+
+
+def _with_required_force(function: Callable, obj, settings) -> tuple:
+    # the slip limit (a third of a second each) is found in the workers, with the trial, and only for missing rows
+    from controller.closed_loop import required_grip_force
+
+    return function(obj, settings), required_grip_force(obj, settings.friction_coefficient)
 
 
 def coerce(row: dict) -> dict:

@@ -55,8 +55,7 @@ def _row(result, info) -> dict:
 
 def run(out_dir, quick: bool = False, trials: int | None = None, processes: int | None = None) -> dict:
     """(a) one bottle trial; (b) randomised trials with and without rotational detection; CSVs and figure."""
-    from controller.closed_loop import TABLE_I_OBJECTS, TrialSettings, random_settings, required_grip_force, \
-        run_trials
+    from controller.closed_loop import TABLE_I_OBJECTS, TrialSettings, random_settings, run_trials
 
     out_dir = Path(out_dir)
     trials = (2 if quick else TRIALS) if trials is None else trials
@@ -91,8 +90,7 @@ def run(out_dir, quick: bool = False, trials: int | None = None, processes: int 
             base = random_settings(rng, hold_time=hold, place=False)
             for rotation in (True, False):
                 settings = replace(base, rotational_slip_detection=rotation)
-                info = dict(object=name, rotation=rotation, trial=trial,
-                            required=required_grip_force(obj, settings.friction_coefficient))
+                info = dict(object=name, rotation=rotation, trial=trial)
                 jobs.append((trial_key(obj, settings), obj, settings, info))
     trial_rows = run_trial_table(out_dir / f"{NAME}_trials.csv", jobs, _row, processes, label=NAME)
     counts = _counts(trial_rows)

@@ -61,14 +61,14 @@ def _row(value, info) -> dict:
                 friction_coefficient=result.settings.friction_coefficient, held=held, dropped=result.dropped,
                 rotated=result.rotated, max_rotation_mrad=result.max_rotation_mrad, tau=tau,
                 tau_min=value["tau_min"], tau_min_failing=value["tau_min_failing"],
-                ratio=tau / value["tau_min"] if held else np.nan, model_limit=info["model_limit"],
+                ratio=tau / value["tau_min"] if held else np.nan, model_limit=info["required"],
                 friction_estimate=result.friction_estimate, slips_detected=len(result.slip_events),
                 bisection_trials=value["bisection_trials"])
 
 
 def run(out_dir, quick: bool = False, trials: int | None = None, processes: int | None = None) -> dict:
     """Controller trial and tau_min per trial; CSV and figure."""
-    from controller.closed_loop import GraspObject, random_settings, required_grip_force
+    from controller.closed_loop import GraspObject, random_settings
 
     out_dir = Path(out_dir)
     trials = (1 if quick else TRIALS) if trials is None else trials
@@ -79,8 +79,7 @@ def run(out_dir, quick: bool = False, trials: int | None = None, processes: int 
         obj = GraspObject(f"box_{mass:g}kg_{1e3 * lever:g}mm", mass, SIZE, lever, 0.035)
         for trial in range(trials):
             settings = random_settings(rng, place=False, hold_time=4.0)
-            info = dict(case=obj.name, trial=trial, mass=mass, lever=lever,
-                        model_limit=required_grip_force(obj, settings.friction_coefficient))
+            info = dict(case=obj.name, trial=trial, mass=mass, lever=lever)
             jobs.append((trial_key(obj, settings, "tau_min"), obj, settings, info))
     rows = run_trial_table(out_dir / f"{NAME}.csv", jobs, _row, processes, label=NAME,
                            function=trial_and_minimum)

@@ -60,7 +60,7 @@ def _row(result, info) -> dict:
 def run(out_dir, quick: bool = False, trials: int | None = None, seed: int = 1,
         processes: int | None = None, objects: list[str] | None = None) -> dict:
     """Run the trials of every Table I object (or of ``objects``); CSV, summary JSON and figure."""
-    from controller.closed_loop import TABLE_I_OBJECTS, random_settings, required_grip_force
+    from controller.closed_loop import TABLE_I_OBJECTS, random_settings
 
     out_dir = Path(out_dir)
     trials = (3 if quick else TRIALS) if trials is None else trials
@@ -75,8 +75,7 @@ def run(out_dir, quick: bool = False, trials: int | None = None, seed: int = 1,
             settings = random_settings(rng)          # drawn for every object: a selection keeps the others' trials
             if objects is not None and name not in objects:
                 continue
-            info = dict(object=name, trial=trial, required=required_grip_force(obj, settings.friction_coefficient),
-                        crush_force=obj.crush_force)
+            info = dict(object=name, trial=trial, crush_force=obj.crush_force)
             jobs.append((trial_key(obj, settings), obj, settings, info))
     rows = run_trial_table(out_dir / f"{NAME}.csv", jobs, _row, processes, label=NAME)
     summary = _summary(rows)
