@@ -24,7 +24,7 @@ import numpy as np
 from contact.scene import BodyShape, GelShape, LoadKind, Scene
 
 __all__ = ["PhysicalLimitError", "PhysicalLimitWarning", "check_scene_limits", "check_increment_limits",
-           "check_resources", "estimate_resources", "contact_centers", "estimated_contact",
+           "check_resources", "estimate_resources", "contact_centers", "estimated_contact", "fine_depth",
            "SMALL_STRAIN_WARN", "SMALL_STRAIN_REFUSE", "CONTACT_WIDTH_WARN", "CONTACT_WIDTH_REFUSE", "SLIDING_WARN",
            "SLIDING_REFUSE"]
 
@@ -85,6 +85,20 @@ def estimated_contact(scene: Scene) -> tuple[float, float]:
         return flat + math.sqrt(2.0 * scene.gel.geometry.edge_radius * indentation), indentation
     half_diagonal = 0.5 * math.hypot(scene.gel.width, scene.gel.depth)
     return half_diagonal, depth or 1e-3 * scene.gel.thickness
+
+
+FINE_DEPTH_FRACTION = 0.5     # fine zone depth / contact radius: Hertz's largest shear stress lies at 0.48 a
+SHALLOW_FINE_DEPTH = 0.2      # mm, fem.mesh.BlockMeshSpec's default: a plane pressing a block's whole top
+
+
+def fine_depth(scene: Scene) -> float:
+    """Depth [mm] below the top down to which a block's elements keep ``mesh.size_contact``: FINE_DEPTH_FRACTION x
+    the estimated contact radius under a sphere (the subsurface stress field lives within about a of the surface; a
+    fine layer only 0.2 mm deep left HCM-1's block 2-4 % too stiff, docs/coupled_reference.md), at most half the
+    block; SHALLOW_FINE_DEPTH otherwise."""
+    if scene.gel.shape != GelShape.BLOCK or scene.body.shape != BodyShape.SPHERE:
+        return SHALLOW_FINE_DEPTH
+    return min(max(FINE_DEPTH_FRACTION * estimated_contact(scene)[0], SHALLOW_FINE_DEPTH), 0.5 * scene.gel.thickness)
 
 
 def _contact_curvature_radius(scene: Scene) -> float:
@@ -203,7 +217,8 @@ def estimate_resources(scene: Scene, fine_radius: float, half: bool) -> dict:
 
         spec = BlockMeshSpec(width=geometry.width, depth=geometry.depth, thickness=geometry.thickness,
                              size_contact=min(size_contact, scene.mesh.size_far), size_far=scene.mesh.size_far,
-                             fine_radius=fine_radius, fine_center=tuple(scene.body.center), grading=scene.mesh.grading)
+                             fine_radius=fine_radius, fine_depth=fine_depth(scene), fine_center=tuple(scene.body.center),
+                             grading=scene.mesh.grading)
         cells = size_cells(spec.target_size, [scene.body.center], geometry.width, geometry.depth / (2 if half else 1),
                            geometry.thickness, spec.size_contact)
         tets = BISECTION_TETS_PER_CELL * cells

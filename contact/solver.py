@@ -15,7 +15,7 @@ from contact.result import (ContactResult, ContactUnderResolved, Increment, Load
 from contact.bumps import assign_bumps
 from contact.compliance import ColumnCache, SurfaceCompliance, compliance_cache_key
 from contact.limits import (PhysicalLimitError, check_increment_limits, check_resources, check_scene_limits,
-                            contact_centers, estimated_contact)
+                            contact_centers, estimated_contact, fine_depth)
 from contact.recovery import surface_triangles
 from contact.scene import Scene
 from fem.elasticity import ElasticModel, assemble_elastic_model
@@ -55,7 +55,8 @@ def _gel_mesh(scene: Scene, fine_radius: float, half: bool):
     if scene.gel.shape == "block":
         spec = BlockMeshSpec(width=scene.gel.width, depth=scene.gel.depth, thickness=scene.gel.thickness,
                              size_contact=size_contact, size_far=scene.mesh.size_far, fine_radius=fine_radius,
-                             fine_center=tuple(scene.body.center), grading=scene.mesh.grading, half=half)
+                             fine_depth=fine_depth(scene), fine_center=tuple(scene.body.center),
+                             grading=scene.mesh.grading, half=half)
         return graded_block_mesh(spec)
     from fem.tetmesh import TetMeshSpec, mesh_gel
 
@@ -67,7 +68,8 @@ def _gel_mesh(scene: Scene, fine_radius: float, half: bool):
 def preparation_key(scene: Scene) -> tuple:
     """Hashable key of everything ``prepare`` depends on: scenes with equal keys can share one Prepared."""
     fine_radius, half = _fine_radius_and_half(scene)
-    return (scene.gel, scene.material, scene.mesh, scene.body.center, round(fine_radius, 12), half)
+    return (scene.gel, scene.material, scene.mesh, scene.body.center, round(fine_radius, 12),
+            round(fine_depth(scene), 12), half)
 
 
 def factorize_stiffness(model: ElasticModel) -> SpdFactorization | SaddlePointFactorization:
