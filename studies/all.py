@@ -34,7 +34,7 @@ SOURCE_PACKAGES = ("fem", "contact", "controller")
 OUTPUT_EXTENSIONS = ("png", "pdf", "csv")
 STAMP_DIR, LOG_DIR = ".stamps", "logs"
 # default wall times [s] measured on the shared 2-core machine (quick: about a tenth), to start the longest first
-EXPECTED_SECONDS = {"convergence": 400, "fig6": 500, "fig3": 120, "fig4": 120, "fig9": 140, "fig10": 40, "fig11": 90,
+EXPECTED_SECONDS = {"convergence": 200, "fig6": 500, "fig3": 120, "fig4": 120, "fig9": 140, "fig10": 40, "fig11": 90,
                     "table1": 60}
 
 

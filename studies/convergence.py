@@ -8,6 +8,13 @@ load path with the full Boussinesq-Cerruti coupling (contact.halfspace; their di
 contact radius and peak pressure, nodal and recovered, against Hertz; tangential shift against Mindlin. A second
 element-size series at nu = 0.49 with the locking-free nodal-average P1 shows the nearly uncoupled case. Wall and
 CPU time are the whole solve (mesh, assembly, factorization, contact path).
+
+Settings: the default runs HCM-1 at h = 0.35 ... 0.14 mm (the knee and both sides of it, enough for the rates),
+P2 at one size, 1 and 5 shear increments, nu = 0.49 at 0.35 / 0.2 / 0.14 mm, the coupled reference on a/15 cells
+and the 3x3 fingertip down to 0.4 mm: about 3 minutes on 2 cores. ``--full`` adds HCM-1 at 0.1 and 0.07 mm (a/10,
+where issue 19's peak-pressure target is set; up to ~170k DOF), P2 at 0.17 and 0.12 mm, 2 and 10 increments at
+0.15 mm, nu = 0.49 at 0.25 and 0.1 mm, the fingertip at 0.3 mm and the reference on a/21 cells: about 4x as long.
+``--quick``: two P1 sizes, no fingertip.
 """
 
 from __future__ import annotations
@@ -27,22 +34,36 @@ TARGET_STICK_RATIO_ERROR = 0.01         # issue 19: recovered c/a against the co
 TARGET_PEAK_PRESSURE_ERROR = 0.03       # recovered p_max against Hertz: the 3 % Hertz tolerance of linear elements
 KNEE_FACTOR = 1.15                      # 3x3 fingertip knee: cheapest mesh within 15 % of the best one
 REFERENCE_SPACING = 0.05                # mm, half-space cells (a/21): recovered c/a within 0.002 of a/15 cells
+DEFAULT_REFERENCE_SPACING = 0.07        # mm (a/15): within 0.001 of a/21 on HCM-1's path, a quarter of its time
 QUICK_REFERENCE_SPACING = 0.1           # mm (a/11): within 0.003 of a/21 at nu = 0.45
 SIZE_STUDY = "element size (P1)"
 NEARLY_INCOMPRESSIBLE_STUDY = "element size (P1 nodal-average, nu = 0.49)"
 
 
-def _cases(quick: bool) -> list[dict]:
-    # bisection refines by levels: these sizes give distinct top-surface spacings (0.3 and 0.25 would not)
-    sizes = (0.35, 0.25) if quick else (0.35, 0.25, 0.2, 0.14, 0.1, 0.07)
-    quadratic = (0.35,) if quick else (0.35, 0.17, 0.12)       # P2 elements are twice these sizes
-    increments = (1, 5) if quick else (1, 2, 5, 10)
-    cases = [dict(study=SIZE_STUDY, size_contact=h, order=1, n_shear=5) for h in sizes]
-    cases += [dict(study="element order (P2)", size_contact=h, order=2, n_shear=5) for h in quadratic]
-    cases += [dict(study="shear increments", size_contact=0.25 if quick else 0.15, order=1, n_shear=n)
-              for n in increments]
+# element sizes [mm] per setting; bisection refines by levels: these give distinct top-surface spacings (0.3 and
+# 0.25 would not). Default: the knee (0.2 = a/5) with sizes on both sides, in about 3 minutes on 2 cores; --full
+# adds the fine meshes (0.1 and 0.07 mm, up to ~170k DOF) and the long P2 and 3x3 cases, about 4x as long.
+SIZES = {"quick": (0.35, 0.25), "default": (0.35, 0.25, 0.2, 0.14), "full": (0.35, 0.25, 0.2, 0.14, 0.1, 0.07)}
+QUADRATIC_SIZES = {"quick": (0.35,), "default": (0.35,), "full": (0.35, 0.17, 0.12)}   # P2 tets are twice these
+INCREMENTS = {"quick": (1, 5), "default": (1, 5), "full": (1, 2, 5, 10)}     # each path needs its own reference
+INCREMENT_SIZE = {"quick": 0.25, "default": 0.2, "full": 0.15}     # mm
+NEARLY_INCOMPRESSIBLE_SIZES = {"quick": (0.35,), "default": (0.35, 0.2, 0.14), "full": (0.35, 0.25, 0.2, 0.14, 0.1)}
+
+
+def setting_name(quick: bool, full: bool) -> str:
+    """"quick", "default" or "full" (--quick and --full together are refused)."""
+    if quick and full:
+        raise ValueError("--quick and --full exclude each other: choose one")
+    return "quick" if quick else ("full" if full else "default")
+
+
+def _cases(setting: str) -> list[dict]:
+    cases = [dict(study=SIZE_STUDY, size_contact=h, order=1, n_shear=5) for h in SIZES[setting]]
+    cases += [dict(study="element order (P2)", size_contact=h, order=2, n_shear=5) for h in QUADRATIC_SIZES[setting]]
+    cases += [dict(study="shear increments", size_contact=INCREMENT_SIZE[setting], order=1, n_shear=n)
+              for n in INCREMENTS[setting]]
     cases += [dict(study=NEARLY_INCOMPRESSIBLE_STUDY, size_contact=h, order=1, n_shear=5, nu=0.49,
-                   volumetric="nodal_average") for h in ((0.35,) if quick else (0.35, 0.25, 0.2, 0.14, 0.1))]
+                   volumetric="nodal_average") for h in NEARLY_INCOMPRESSIBLE_SIZES[setting]]
     return cases
 
 
@@ -139,20 +160,33 @@ def knee(rows: list[dict], factor: float = KNEE_FACTOR) -> dict | None:
     return min((r for r in rows if r["stick_ratio_error"] <= factor * best), key=lambda r: r["wall_time"])
 
 
-def run(out_dir, quick: bool = False) -> dict:
+def add_arguments(parser) -> None:
+    """Options of ``python -m studies convergence``."""
+    parser.add_argument("--full", action="store_true",
+                        help="add the fine meshes (HCM-1 h = 0.1 and 0.07 mm, P2 0.17 and 0.12 mm, 3x3 fingertip "
+                             "0.3 mm) and 10 shear increments: about 4x the default's few minutes")
+
+
+def run(out_dir, quick: bool = False, full: bool = False) -> dict:
     """Run every case, write convergence.csv / .png / .pdf, mark the HCM-1 knee (cheapest P1 mesh whose recovered
     stick ratio and peak pressure meet their targets, ``accuracy_knee``) and, not in --quick, the 3x3
-    fingertip's (cheapest P1 mesh within KNEE_FACTOR of its best nodal stick-ratio error)."""
+    fingertip's (cheapest P1 mesh within KNEE_FACTOR of its best nodal stick-ratio error). ``full``: the fine
+    meshes too (SIZES etc. under "full")."""
     from tqdm import tqdm
 
+    setting = setting_name(quick, full)
     out_dir = Path(out_dir)
-    spacing = QUICK_REFERENCE_SPACING if quick else REFERENCE_SPACING
-    rows = []
-    for case in tqdm(_cases(quick), desc=NAME, unit="case"):
+    spacing = {"quick": QUICK_REFERENCE_SPACING, "default": DEFAULT_REFERENCE_SPACING,
+               "full": REFERENCE_SPACING}[setting]
+    rows, solved = [], {}
+    for case in tqdm(_cases(setting), desc=NAME, unit="case"):
         options = {k: case[k] for k in ("size_contact", "order", "n_shear", "nu", "volumetric") if k in case}
-        rows.append({**case, **solve_case(**options, reference_spacing=spacing)})
+        key = tuple(sorted(options.items()))      # a case of two series (h = 0.2 with 5 increments) is solved once
+        if key not in solved:
+            solved[key] = solve_case(**options, reference_spacing=spacing)
+        rows.append({**case, **solved[key]})
         write_csv_atomic(out_dir / f"{NAME}.csv", rows)          # keep what is done if a later case fails
-    for case in (() if quick else tqdm(array_cases(), desc=f"{NAME} (3x3 fingertip)", unit="case")):
+    for case in (() if quick else tqdm(array_cases(full), desc=f"{NAME} (3x3 fingertip)", unit="case")):
         rows.append({**case, **solve_array_case(**{k: case[k] for k in ("size_contact", "order", "n_shear")})})
         write_csv_atomic(out_dir / f"{NAME}.csv", rows)
     sizes = [r for r in rows if r["study"] == SIZE_STUDY]

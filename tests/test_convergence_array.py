@@ -5,7 +5,7 @@ import csv
 import pytest
 
 from studies import convergence
-from studies._convergence_array import ARRAY_LOAD_RATIO, ARRAY_STUDIES, array_scene, solve_array_case
+from studies._convergence_array import ARRAY_LOAD_RATIO, ARRAY_STUDIES, array_cases, array_scene, solve_array_case
 
 
 def _row(study, size, error, wall, order=1, n_shear=1, peak_pressure_error=0.02):
@@ -42,8 +42,20 @@ def test_array_scene_shears_in_equal_steps_to_the_final_load():
         array_scene(0.6, n_shear=0)
 
 
+def test_default_setting_leaves_the_fine_meshes_to_full():
+    default, full = convergence._cases("default"), convergence._cases("full")
+    sizes = {r["size_contact"] for r in default if r["study"] == convergence.SIZE_STUDY}
+    assert sizes == {0.35, 0.25, 0.2, 0.14}               # the knee (0.2) with a size on each side for the rates
+    assert {0.1, 0.07} <= {r["size_contact"] for r in full if r["study"] == convergence.SIZE_STUDY}
+    assert len(full) > len(default)
+    assert 0.3 not in {r["size_contact"] for r in array_cases(full=False)}
+    assert 0.3 in {r["size_contact"] for r in array_cases(full=True)}
+    with pytest.raises(ValueError, match="--quick and --full exclude each other"):
+        convergence.setting_name(quick=True, full=True)
+
+
 def test_full_run_marks_one_knee_per_part(tmp_path, monkeypatch):
-    """run() without --quick, the solves replaced: every array study is run and each part gets its own knee."""
+    """run(full=True), the solves replaced: every array study is run and each part gets its own knee."""
     errors = {0.9: 0.05, 0.6: 0.03, 0.4: 0.027, 0.3: 0.026}        # array knee: h = 0.4 (cheaper than 0.3)
 
     def fake_array(size_contact, order, n_shear):
@@ -60,7 +72,7 @@ def test_full_run_marks_one_knee_per_part(tmp_path, monkeypatch):
 
     monkeypatch.setattr(convergence, "solve_array_case", fake_array)
     monkeypatch.setattr(convergence, "solve_case", fake_hcm1)
-    summary = convergence.run(tmp_path, quick=False)
+    summary = convergence.run(tmp_path, full=True)
     with open(tmp_path / "convergence.csv") as stream:
         rows = list(csv.DictReader(stream))
     assert {r["study"] for r in rows} >= set(ARRAY_STUDIES)
