@@ -58,19 +58,24 @@ def interpolated(control: BodyControl, state: ContactState, lever: np.ndarray, f
         torque=between(float((lever * state.tangential_force).sum()), control.torque))
 
 
-def solve_with_substeps(solve, state: ContactState, control: BodyControl, lever: np.ndarray, depth: int = 0):
+def solve_with_substeps(solve, state: ContactState, control: BodyControl, lever: np.ndarray, depth: int = 0,
+                        start_level: int = 0):
     """Solve an increment; if Newton does not converge, split it in two halves (recursively, friction follows the
-    finer path), up to MAX_BISECTIONS levels. Returns (state, iterations, history, sub-steps)."""
-    try:
-        new_state, iterations, history = solve(state, control)
-        return new_state, iterations, history, 1
-    except ContactNotConverged:
-        if depth >= MAX_BISECTIONS or not np.any(state.normal_force > 0):
-            raise
-    middle, it1, _, n1 = solve_with_substeps(solve, state, interpolated(control, state, lever, 0.5), lever,
-                                              depth + 1)
-    final, it2, history, n2 = solve_with_substeps(solve, middle, control, lever, depth + 1)
-    return final, it1 + it2, history, n1 + n2
+    finer path), up to MAX_BISECTIONS levels. ``start_level``: split into 2^start_level sub-steps without trying
+    the coarser ones first (the level an earlier increment of the same load needed: ``solve_scene`` passes it on,
+    so a path whose steps all need quarter steps does not fail twice per increment first). Returns (state,
+    iterations, history, sub-steps, level): ``level`` the deepest split that converged."""
+    if depth >= start_level:
+        try:
+            new_state, iterations, history = solve(state, control)
+            return new_state, iterations, history, 1, depth
+        except ContactNotConverged:
+            if depth >= MAX_BISECTIONS or not np.any(state.normal_force > 0):
+                raise
+    middle, it1, _, n1, level1 = solve_with_substeps(solve, state, interpolated(control, state, lever, 0.5), lever,
+                                                     depth + 1, start_level)
+    final, it2, history, n2, level2 = solve_with_substeps(solve, middle, control, lever, depth + 1, start_level)
+    return final, it1 + it2, history, n1 + n2, max(level1, level2)
 
 
 def scaled(control: BodyControl, factor: float) -> BodyControl:

@@ -206,6 +206,7 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
     warned: set = set()
     linear_solver = NewtonLinearSolver()
     bar = None
+    level, level_kind = 0, None      # sub-step level the last increment of this load kind needed (_controls)
     if progress:
         from tqdm import tqdm
 
@@ -227,7 +228,10 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
                                        linear_solver=linear_solver)
 
             try:
-                state, iterations, history, substeps = solve_with_substeps(solve, state, control, lever)
+                if kind != level_kind:
+                    level, level_kind = 0, kind
+                state, iterations, history, substeps, level = solve_with_substeps(solve, state, control, lever,
+                                                                                  start_level=level)
             except ContactNotConverged as error:
                 raise PathNotCompleted(f"increment {len(result.increments) + 1} ({kind}): {error}", result) from error
             result.increments.append(record_increment(kind, state, iterations, history, model, prepared.factorization,

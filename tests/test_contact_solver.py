@@ -255,3 +255,29 @@ def hcm1_result():
     from contact.scene import load_scene
 
     return solve_scene(load_scene(Path(__file__).parents[1] / "studies" / "scenes" / "hcm1.toml"))
+
+
+def test_substeps_start_at_the_level_an_earlier_increment_needed():
+    # a synthetic increment solver that converges only for steps up to a quarter of 0.4 rad: the first increment
+    # fails at the full and half step and converges in quarters (level 2); started at level 2 the next increment
+    # is split into the same quarters at once, with no failed attempt, and lands on the same targets
+    from contact._controls import solve_with_substeps
+    from contact._newton import BodyControl, ContactNotConverged, ContactState
+
+    attempts = []
+
+    def solve(state, control):
+        attempts.append(control.angle - state.angle)
+        if control.angle - state.angle > 0.1 + 1e-12:
+            raise ContactNotConverged("step too large", [1.0])
+        return ContactState(state.normal_force, state.tangential_force, state.displacement, angle=control.angle), 3, [0.0]
+
+    lever = np.zeros((1, 2))
+    start = ContactState(np.ones(1), np.zeros((1, 2)), np.zeros((1, 3)))
+    first = solve_with_substeps(solve, start, BodyControl(normal_force=1.0, angle=0.4), lever)
+    assert first[0].angle == pytest.approx(0.4) and first[3:] == (4, 2)
+    assert len(attempts) == 7                     # full, half, 2 quarters, half, 2 quarters
+    attempts.clear()
+    second = solve_with_substeps(solve, first[0], BodyControl(normal_force=1.0, angle=0.8), lever, start_level=2)
+    assert second[0].angle == pytest.approx(0.8) and second[3:] == (4, 2)
+    assert attempts == pytest.approx([0.1] * 4)   # no coarser attempt before the quarters
