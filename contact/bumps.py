@@ -22,7 +22,7 @@ import numpy as np
 
 from contact._newton import OPEN, SLIP, STICK
 
-__all__ = ["BumpResults", "BUMP_FIELDS", "assign_bumps", "bump_results"]
+__all__ = ["BumpResults", "BUMP_FIELDS", "assign_bumps", "bump_results", "bump_shear_displacements"]
 
 ROUND_OFF = 1e-9     # |margin| below this is 0: sliding points sit on the cone to the Newton tolerance, not exactly
 
@@ -136,3 +136,35 @@ def bump_results(bump: np.ndarray, centers: np.ndarray, status: np.ndarray, norm
         stick_ratio=np.where(touching, np.sqrt(stick_area / np.where(touching, contact_area, 1.0)), 0.0),
         gross_slip_margin=np.where(np.abs(margin) < ROUND_OFF, 0.0, margin), open_points=counts[0],
         stick_points=counts[1], slip_points=counts[2])
+
+
+def bump_shear_displacements(result) -> np.ndarray:
+    """Shear displacement of each bump per increment, (t, k, 2) [mm]: the gel surface's tangential displacement
+    averaged over the bump's contact with the contact normal forces as weights - its value at the bump's centre of
+    pressure, the point whose motion the paper's CoP estimator tracks (sec. IV-B: "the displacement of the robot
+    elastic fingertip in the tangential direction").
+
+    It is the bump's elastic deformation, not the body's motion: a bump stuck to the body moves with it, one that
+    slides (partly or as a whole) lags it by its slip. ``result``: a ``contact.result.ContactResult`` of a bump
+    array (``candidate_bump``, ``bump_centers``). In a mirror half model (y >= 0 computed) a bump on the other side
+    takes its mirror's value with y negated. A bump without contact in an increment is NaN there.
+    """
+    centers = np.asarray(result.bump_centers, dtype=float)
+    count = len(centers)
+    bump = result.candidate_bump
+    dofs = result.model.top.dofs[result.candidates, :2]
+    areas = result.candidate_areas
+    mirror = np.argmin(np.linalg.norm(centers[:, None, :] - centers[None, :, :] * [1.0, -1.0], axis=2), axis=1)
+    shears = np.full((len(result.increments), count, 2), np.nan)
+    for number, increment in enumerate(result.increments):
+        weights = np.where(increment.status != OPEN, increment.pressure * areas, 0.0)
+        total = np.bincount(bump, weights=weights, minlength=count)
+        tangential = increment.displacement_full[dofs]                                   # (n, 2) [mm]
+        touching = total > 0.0
+        for axis in range(2):
+            weighted = np.bincount(bump, weights=weights * tangential[:, axis], minlength=count)
+            shears[number, touching, axis] = weighted[touching] / total[touching]
+        if result.mesh_info.get("half_model"):
+            other = ~touching & touching[mirror]
+            shears[number, other] = shears[number, mirror[other]] * [1.0, -1.0]
+    return shears

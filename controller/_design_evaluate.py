@@ -9,7 +9,7 @@ import socket
 import time
 
 from ._design_metrics import capacity_metrics, drop_metrics, estimation_metrics, mesh_metrics
-from ._design_spec import DesignStudy, FingertipDesign, SensorModel, design_scenes, twist_angles
+from ._design_spec import DesignStudy, FingertipDesign, SensorModel, design_scenes
 
 __all__ = ["evaluate_designs", "design_record"]
 
@@ -22,7 +22,9 @@ def design_record(case_id: str, design, status: str, error: str | None, metrics:
             "worker": f"{socket.gethostname()}:{os.getpid()}"}
 
 
-def _increment_rows(result, path: str, ratios, estimates) -> list[dict]:
+def _increment_rows(result, path: str, ratios, estimates, bumps_truth=None) -> list[dict]:
+    """Rows of one path; ``estimates`` (t,) the estimated shift [mm] or angle [rad], ``bumps_truth`` (t,) what they
+    estimate: the bumps' mean shear displacement [mm] or their eq. 9 rotation [rad] (``estimation_metrics``)."""
     rows = []
     for number, increment in enumerate(result.increments):
         bumps = increment.bumps
@@ -33,7 +35,9 @@ def _increment_rows(result, path: str, ratios, estimates) -> list[dict]:
                "stick_ratio": increment.stick_ratio, "contact_area": increment.contact_area,
                "least_bump_margin": float(bumps.gross_slip_margin.min()),
                "least_bump_stick_ratio": float(bumps.stick_ratio.min()),
-               "estimated_shift": None, "estimated_angle": None}
+               "bump_shift": None, "bump_angle": None, "estimated_shift": None, "estimated_angle": None}
+        if number and bumps_truth is not None:
+            row["bump_shift" if path == "shear" else "bump_angle"] = float(bumps_truth[number - 1])
         if number and estimates is not None:
             key = "estimated_shift" if path == "shear" else "estimated_angle"
             row[key] = float(estimates[number - 1])
@@ -84,17 +88,16 @@ def evaluate_designs(items: list[tuple[str, dict, dict]], cases_dir: str | None 
         increments, status, message = [], "ok" if error is None else "failed", error
         if "shear" in results:                      # the shear path's metrics survive a failed twist path
             try:
-                angles = twist_angles(design, study)
                 draws = range(study.noise_draws) if study.sensor is SensorModel.CAPACITIVE else (0,)
-                if "twist" not in results:
-                    angles = ()
                 estimated, estimates = estimation_metrics(results["shear"], results.get("twist"),
                                                           design.sensor(study.sensor), design.layout(), draws,
-                                                          study.frames_per_state, angles)
+                                                          study.frames_per_state)
                 metrics.update(estimated)
-                increments = _increment_rows(results["shear"], "shear", study.load_ratios, estimates["shift"])
+                increments = _increment_rows(results["shear"], "shear", study.load_ratios, estimates["shift"],
+                                             estimates["bump_shift"])
                 if "twist" in results:
-                    increments += _increment_rows(results["twist"], "twist", (), estimates["angle"])
+                    increments += _increment_rows(results["twist"], "twist", (), estimates["angle"],
+                                                  estimates["bump_angle"])
             except (ValueError, RuntimeError) as failure:
                 status, message = "failed", f"{type(failure).__name__}: {failure}"
         bad = [key for key, value in metrics.items() if isinstance(value, float) and not math.isfinite(value)]

@@ -43,7 +43,8 @@ def increment_table(records: list[dict]):
     rows = [{"case_id": record["case_id"], **row} for record in records for row in record.get("increments", [])]
     columns = ["case_id", "path", "increment", "load_kind", "load_ratio", "normal_force", "tangential_force",
                "torque", "shift", "angle", "stick_ratio", "contact_area", "least_bump_margin",
-               "least_bump_stick_ratio", "estimated_shift", "estimated_angle"]
+               "least_bump_stick_ratio", "bump_shift", "bump_angle", "estimated_shift",
+               "estimated_angle"]
     table = pd.DataFrame(rows, columns=columns)
     types = {key: "Float64" for key in columns[4:]}
     types.update(case_id="string", path="string", load_kind="string", increment="Int64")

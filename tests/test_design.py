@@ -112,6 +112,23 @@ def test_metrics_are_physical(quick_sweep):
         assert 0.0 < row["translational_error"] < 1.0 and row["calibrated_gain"] > 0.0
 
 
+def test_estimates_are_compared_with_the_bumps_own_shear_displacement(quick_sweep):
+    # the estimator estimates the bumps' shear displacement (contact.bumps.bump_shear_displacements), not the
+    # plate's motion: a bump's contact points stick to the plate or slide behind it, so its force-weighted mean
+    # displacement lies between 0 and the plate's shift (angle), and the lag grows as slip spreads with the load
+    _, _, table, increments = quick_sweep
+    for case_id in table["case_id"]:
+        shear = increments[(increments["case_id"] == case_id) & (increments["path"] == "shear")].iloc[1:]
+        bump, plate = shear["bump_shift"].to_numpy(float), shear["shift"].to_numpy(float)
+        assert np.all(bump > 0.0) and np.all(bump <= plate * (1 + 1e-9))
+        lag = 1.0 - bump / plate
+        assert np.all(np.diff(lag) > 0.0) and lag[-1] > 0.05       # Q/(mu P) = 0.95: the edges slide
+        twist = increments[(increments["case_id"] == case_id) & (increments["path"] == "twist")].iloc[1:]
+        if len(twist):
+            turned, angle = twist["bump_angle"].to_numpy(float), twist["angle"].to_numpy(float)
+            assert np.all(turned > 0.0) and np.all(turned <= angle * (1 + 1e-9))
+
+
 def test_a_rerun_skips_the_recorded_designs(quick_sweep, monkeypatch):
     out, designs, table, _ = quick_sweep
     import contact.solver
