@@ -103,7 +103,7 @@ def estimation_metrics(shear, twist, array, layout, draws, frames: int) -> tuple
     eq. 9 rotation of the bumps' own shear displacements (the plate's angle less the bumps' slip).
     """
     from contact.bumps import bump_shear_displacements
-    from controller.bench import averaged_cop_shifts
+    from controller.bench import averaged_cop_shifts, readings_operator
     from controller.calibration import EstimatorCalibration, calibrate_gain
     from controller.estimator import estimate_slip
     from controller.rigid_transform import fit_rigid_transform
@@ -120,8 +120,10 @@ def estimation_metrics(shear, twist, array, layout, draws, frames: int) -> tuple
         centers = np.asarray(twist.bump_centers, dtype=float)
         applied_angles = fit_rigid_transform(centers, centers + (turned[1:] - turned[0])).rotation     # (t,) [rad]
     outcomes, shifts, angles = [], [], []
+    shear_operator = readings_operator(shear, array)                  # built once for every draw
+    twist_operator = readings_operator(twist, array) if twist is not None else None
     for seed in draws:
-        cop_shift = averaged_cop_shifts(shear, array, layout, seed, frames)[0]                  # (t + 1, k, 2)
+        cop_shift = averaged_cop_shifts(shear, array, layout, seed, frames, shear_operator)[0]  # (t + 1, k, 2)
         calibration = calibrate_gain(cop_shift[1:3], bump_shift[:2])
         raw = cop_shift[1:, :, 0].mean(axis=1)
         estimate = calibration.gain * raw
@@ -130,7 +132,8 @@ def estimation_metrics(shear, twist, array, layout, draws, frames: int) -> tuple
                    "calibrated_gain": calibration.gain}
         shifts.append(estimate)
         if twist is not None:
-            _, readings, reference, settings = averaged_cop_shifts(twist, array, layout, seed, frames)
+            _, readings, reference, settings = averaged_cop_shifts(twist, array, layout, seed, frames,
+                                                                          twist_operator)
             rotation = estimate_slip(readings, array, layout, reference,
                                      EstimatorCalibration(gain=calibration.gain), settings).transform.rotation[1:]
             outcome["rotational_error"] = _mean_relative(rotation, applied_angles)

@@ -12,7 +12,7 @@ import numpy as np
 __all__ = ["FOOTPRINT", "BASE_THICKNESS", "BUMP_FILL", "YOUNGS_MODULUS", "POISSONS_RATIO", "FRICTION", "NORMAL_FORCE",
            "BENCH_SIZE_CONTACT", "BENCH_SIZE_BASE", "FRAMES_PER_STATE", "NOISE_GATE", "fingertip_gel", "bench_scene",
            "plate_shear_scene", "sensor_readings", "sensor_array", "bump_layout", "shifts_of", "estimator_settings",
-           "averaged_cop_shifts"]
+           "averaged_cop_shifts", "base_pressure_field", "readings_operator"]
 
 FOOTPRINT = 40.0          # mm, square fingertip (paper sec. IV-B)
 BASE_THICKNESS = 3.0      # mm, gel layer between the bumps and the sensor
@@ -71,16 +71,32 @@ def plate_shear_scene(name: str, gel, normal_force: float, load_ratios, size_con
                         Load(LoadKind.SHEAR, "force", tuple(float(r * mu * normal_force) for r in load_ratios))))
 
 
-def sensor_readings(result, array, rng=None) -> np.ndarray:
-    """Readings (t, ny, nx) [N] of ``array`` for every increment of an FEM result (one frame per increment; the
-    node model's noise, if any, drawn from ``rng``: a Generator, a seed or None)."""
-    from controller.sensor import PressureField, cell_force_operator, sample
+def base_pressure_field(result):
+    """The base pressure of every increment of an FEM result as a ``controller.sensor.PressureField`` (t frames)."""
+    from controller.sensor import PressureField
 
     base = result.model.base
     pressure = np.stack([increment.base_pressure for increment in result.increments])      # (t, n_base)
-    field = PressureField(base.positions[:, :2], base.triangles, pressure)
-    operator = cell_force_operator(field.positions, field.triangles, array)
-    return sample(field, array, rng=rng, operator=operator)
+    return PressureField(base.positions[:, :2], base.triangles, pressure)
+
+
+def readings_operator(result, array):
+    """The pad-force operator of ``array`` on the base mesh of ``result`` (``controller.sensor.cell_force_operator``):
+    build it once per result and array, pass it to every frame and noise draw (its build costs ~20 frames)."""
+    from controller.sensor import cell_force_operator
+
+    field = base_pressure_field(result)
+    return cell_force_operator(field.positions, field.triangles, array)
+
+
+def sensor_readings(result, array, rng=None, operator=None) -> np.ndarray:
+    """Readings (t, ny, nx) [N] of ``array`` for every increment of an FEM result (one frame per increment; the
+    node model's noise, if any, drawn from ``rng``: a Generator, a seed or None); ``operator`` from
+    ``readings_operator`` (built here when None)."""
+    from controller.sensor import sample
+
+    operator = readings_operator(result, array) if operator is None else operator
+    return sample(base_pressure_field(result), array, rng=rng, operator=operator)
 
 
 def sensor_array(pitch: float):
@@ -119,15 +135,19 @@ def estimator_settings(array, frames: int = FRAMES_PER_STATE):
     return EstimatorSettings(node_floor=NOISE_GATE * array.node.force_noise() / np.sqrt(frames))
 
 
-def averaged_cop_shifts(result, array, layout, seed=None, frames: int = FRAMES_PER_STATE):
+def averaged_cop_shifts(result, array, layout, seed=None, frames: int = FRAMES_PER_STATE, operator=None):
     """Per-bump CoP shifts (t, k, 2) [mm] against the first increment, from readings averaged over ``frames``
-    frames per increment (one frame for a noise-free node model); the noise drawn from ``seed``. Also returns the
-    readings (t, ny, nx) [N], the reference and the estimator settings used."""
+    frames per increment (one frame for a noise-free node model); the noise drawn from ``seed``; ``operator`` from
+    ``readings_operator`` (built once here when None). Also returns the readings (t, ny, nx) [N], the reference
+    and the estimator settings used."""
     from controller.estimator import BumpReference, estimate_slip
+    from controller.sensor import sample
 
     rng = np.random.default_rng(seed)
     count = 1 if array.node is None or array.node.noise_floor == 0.0 else frames
-    readings = np.mean([sensor_readings(result, array, rng) for _ in range(count)], axis=0)
+    field = base_pressure_field(result)
+    operator = readings_operator(result, array) if operator is None else operator
+    readings = np.mean([sample(field, array, rng=rng, operator=operator) for _ in range(count)], axis=0)
     settings = estimator_settings(array, count)
     reference = BumpReference.from_readings(readings[:1], array, layout, settings)
     return estimate_slip(readings, array, layout, reference, settings=settings).cop_shift, readings, reference, \

@@ -48,11 +48,12 @@ def sensor_model(sensor: str, pitch: float):
     return capacitive_array(pitch, cells.node_counts, pad_gap=0.5, node=CapacitiveNode())
 
 
-def cop_shifts(result, array, layout, seed: int | None):
-    """Per-bump CoP shifts (t, k, 2) [mm], readings averaged over FRAMES_PER_STATE frames per state (noisy sensor)."""
+def cop_shifts(result, array, layout, seed: int | None, operator=None):
+    """Per-bump CoP shifts (t, k, 2) [mm], readings averaged over FRAMES_PER_STATE frames per state (noisy sensor);
+    ``operator``: ``controller.bench.readings_operator`` of the result and array, built once for every seed."""
     from controller.bench import averaged_cop_shifts
 
-    return averaged_cop_shifts(result, array, layout, seed, FRAMES_PER_STATE)[0]
+    return averaged_cop_shifts(result, array, layout, seed, FRAMES_PER_STATE, operator)[0]
 
 
 def evaluate(cop_shift: np.ndarray, shifts, design_gain: float | None = None) -> dict:
@@ -79,7 +80,7 @@ def run(out_dir, quick: bool = False) -> dict:
     from tqdm import tqdm
 
     from contact.solver import solve_scene
-    from controller.bench import BENCH_SIZE_BASE, BENCH_SIZE_CONTACT, bench_scene, bump_layout
+    from controller.bench import BENCH_SIZE_BASE, BENCH_SIZE_CONTACT, bench_scene, bump_layout, readings_operator
 
     out_dir = Path(out_dir)
     arrays = (1, 3) if quick else (1, 2, 3, 4)
@@ -98,7 +99,9 @@ def run(out_dir, quick: bool = False) -> dict:
             for pitch in PITCHES:
                 array = sensor_model(sensor, pitch)
                 seeds = range(draws) if array.node is not None and array.node.noise_floor > 0 else (None,)
-                outcomes = [evaluate(cop_shifts(result, array, layout, seed), shifts, design_gain) for seed in seeds]
+                operator = readings_operator(result, array)
+                outcomes = [evaluate(cop_shifts(result, array, layout, seed, operator), shifts, design_gain)
+                            for seed in seeds]
                 if design_gain is None:
                     design_gain = outcomes[0]["gain"]
                 mean = {key: float(np.mean([o[key] for o in outcomes])) for key in outcomes[0]}
