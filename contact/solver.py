@@ -131,13 +131,16 @@ def _augmentation(areas: np.ndarray, effective_modulus: float) -> np.ndarray:
 
 
 def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool = False,
-                cache_compliance: bool = True) -> ContactResult:
+                cache_compliance: bool = True, remember_substeps: bool = True) -> ContactResult:
     """Solve the scene's load path increment by increment; raise PathNotCompleted (with the partial result) on failure.
 
     The physical limits (contact.limits) are checked first: a press past small strain or a contact wider than the
     body's curvature is refused before meshing, and each increment's depth and sliding are checked as it converges.
     ``cache_compliance``: read the surface compliance columns from the disk cache (``contact.compliance.ColumnCache``)
     and write the new ones back; off, every column is solved here (benchmarks that time the columns turn it off).
+    ``remember_substeps``: an increment starts split as finely as the last one of its load kind needed
+    (``contact._controls.solve_with_substeps``); off, each tries the whole step first (``studies benchmark
+    --substeps`` compares the two).
     """
     check_scene_limits(scene)
     prepared = prepared or prepare(scene, progress)
@@ -228,7 +231,7 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
                                        linear_solver=linear_solver)
 
             try:
-                if kind != level_kind:
+                if kind != level_kind or not remember_substeps:
                     level, level_kind = 0, kind
                 state, iterations, history, substeps, level = solve_with_substeps(solve, state, control, lever,
                                                                                   start_level=level)

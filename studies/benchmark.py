@@ -16,6 +16,9 @@ SCALING_TARGET at every size is the target (benchmark_scaling.csv / .json).
 nodal-average saddle-point system the solver uses (``contact.solver.factorize_stiffness``): nonzeros of the matrix
 and of its factor, factorization time and the time of 256 unit right-hand sides (compliance columns at the top
 points nearest the contact), in benchmark_factorizations.csv / .json.
+
+``--substeps`` times a 3x3 array's twist path with and without remembered Newton sub-steps
+(``studies._benchmark_substeps``).
 """
 
 from __future__ import annotations
@@ -46,9 +49,12 @@ def add_arguments(parser) -> None:
     parser.add_argument("--factorizations", action="store_true",
                         help="compare the factorizations of standard P1, nodal-average K and its saddle-point "
                              "system on the stability block instead of timing HCM-1")
+    parser.add_argument("--substeps", action="store_true",
+                        help="a 3x3 array's twist path with and without remembered Newton sub-steps, side by side")
 
 
-def run(out_dir, quick: bool = False, repeats: int = 3, factorizations: bool = False, scaling: bool = False) -> dict:
+def run(out_dir, quick: bool = False, repeats: int = 3, factorizations: bool = False, scaling: bool = False,
+        substeps: bool = False) -> dict:
     """Time the HCM-1 path; write benchmark.csv (one row per repeat) and benchmark.json (medians)."""
     from contact.scene import load_scene
     from contact.solver import solve_scene
@@ -59,6 +65,10 @@ def run(out_dir, quick: bool = False, repeats: int = 3, factorizations: bool = F
         return cost_scaling(out_dir, quick)
     if factorizations:
         return compare_factorizations(out_dir, quick, 1 if quick else repeats)
+    if substeps:
+        from studies._benchmark_substeps import compare_substeps
+
+        return compare_substeps(out_dir, quick, 1 if quick else repeats)
     scene = load_scene(SCENE)
     if quick:
         scene = dataclasses.replace(scene, mesh=dataclasses.replace(scene.mesh, size_contact=0.25))

@@ -126,6 +126,23 @@ def test_benchmark_quick_writes_medians(tmp_path):
                                                                rel=1e-9)
 
 
+def test_benchmark_substeps_quick_follows_the_same_path(tmp_path):
+    import csv
+
+    from studies import benchmark
+
+    benchmark.run(tmp_path, quick=True, substeps=True)
+    summary = json.loads((tmp_path / "benchmark_substeps.json").read_text())
+    with open(tmp_path / "benchmark_substeps.csv") as stream:
+        rows = {row["remember_substeps"]: row for row in csv.DictReader(stream)}
+    # remembered sub-steps never split more coarsely than bisection found necessary, so they take at least as many
+    assert int(rows["True"]["substeps"]) >= int(rows["False"]["substeps"])
+    # where bisection took a coarser later step the path differs by its discretisation: 1.5e-4 of the largest
+    # torque measured on this mesh, 1e-3 allowed (a different solution would differ by the twist's own size)
+    assert summary["largest_torque_difference"] <= 1e-3 * summary["largest_torque"]
+    assert summary["ratio"] == pytest.approx(summary["wall_remembered"] / summary["wall_bisected"], rel=1e-9)
+
+
 def test_benchmark_factorizations_quick_agree(tmp_path):
     from studies import benchmark
 
