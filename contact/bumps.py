@@ -98,6 +98,12 @@ def assign_bumps(positions: np.ndarray, centers: np.ndarray) -> np.ndarray:
     return np.argmin((offsets**2).sum(axis=2), axis=1)
 
 
+def mirror_bumps(centers: np.ndarray) -> np.ndarray:
+    """Index (k,) of each bump's mirror image in y = 0 (itself for a bump on the plane)."""
+    centers = np.asarray(centers, dtype=float)
+    return np.argmin(np.linalg.norm(centers[:, None, :] - centers[None, :, :] * [1.0, -1.0], axis=2), axis=1)
+
+
 def bump_results(bump: np.ndarray, centers: np.ndarray, status: np.ndarray, normal_force: np.ndarray,
                  tangential_force: np.ndarray, areas: np.ndarray, positions: np.ndarray, lever: np.ndarray,
                  friction_coefficient: float, multiplicity: float = 1.0) -> BumpResults:
@@ -105,30 +111,42 @@ def bump_results(bump: np.ndarray, centers: np.ndarray, status: np.ndarray, norm
 
     bump (n,) bump index of each candidate point; centers (k, 2) [mm]; status (n,) OPEN/STICK/SLIP; normal_force
     (n,) [N]; tangential_force (n, 2) [N]; areas (n,) tributary areas [mm^2]; positions (n, 2+) [mm]; lever (n, 2)
-    twist lever arms about the twist centre [mm/rad]. ``multiplicity`` = 2 for a mirror half model: forces and
-    areas along x count twice, y-forces and torques cancel (as in ``contact.result.record_increment``).
+    twist lever arms about the twist centre [mm/rad]. ``multiplicity`` = 2 for a mirror half model (y >= 0
+    computed): a bump cut by the plane y = 0 counts its forces and areas along x twice and its y-force and torques
+    cancel (as in ``contact.result.record_increment``); a bump off the plane is whole in the computed half, and its
+    mirror takes its values with y-force and torques negated. The point counts are those of the computed points.
     """
     count = len(centers)
 
     def per_bump(values):
         return np.bincount(bump, weights=values, minlength=count)
 
-    whole = multiplicity == 1.0
-    normal = multiplicity * per_bump(normal_force)
-    tangential = np.column_stack([multiplicity * per_bump(tangential_force[:, 0]),
-                                  per_bump(tangential_force[:, 1]) if whole else np.zeros(count)])
-    torque = per_bump((lever * tangential_force).sum(axis=1)) if whole else np.zeros(count)
+    normal = per_bump(normal_force)
+    tangential = np.column_stack([per_bump(tangential_force[:, 0]), per_bump(tangential_force[:, 1])])
+    torque = per_bump((lever * tangential_force).sum(axis=1))
     arm = positions[:, :2] - np.asarray(centers, dtype=float)[bump]                        # (n, 2) [mm]
-    spin = per_bump(arm[:, 0] * tangential_force[:, 1] - arm[:, 1] * tangential_force[:, 0]) if whole \
-        else np.zeros(count)
-    contact_area = multiplicity * per_bump(np.where(status != OPEN, areas, 0.0))
-    stick_area = multiplicity * per_bump(np.where(status == STICK, areas, 0.0))
-    touching = contact_area > 0.0
-    capacity = friction_coefficient * per_bump(normal_force)
+    spin = per_bump(arm[:, 0] * tangential_force[:, 1] - arm[:, 1] * tangential_force[:, 0])
+    contact_area = per_bump(np.where(status != OPEN, areas, 0.0))
+    stick_area = per_bump(np.where(status == STICK, areas, 0.0))
     used = per_bump(np.linalg.norm(tangential_force, axis=1))
-    margin = np.where(capacity > 0.0, 1.0 - used / np.where(capacity > 0.0, capacity, 1.0),
-                      np.where(per_bump(normal_force) > 0.0, 0.0, 1.0))
     counts = [np.bincount(bump[status == code], minlength=count) for code in (OPEN, STICK, SLIP)]
+    if multiplicity != 1.0:
+        mirror = mirror_bumps(centers)
+        cut = mirror == np.arange(count)                       # on the plane: half of the bump computed
+        for values in (normal, tangential[:, 0], contact_area, stick_area, used):
+            values[cut] *= multiplicity
+        for values in (tangential[:, 1], torque, spin):
+            values[cut] = 0.0
+        image = (np.asarray(centers, dtype=float)[:, 1] < 0.0) & ~cut        # not computed: its mirror's values
+        source = mirror[image]
+        for values in (normal, tangential[:, 0], contact_area, stick_area, used, *counts):
+            values[image] = values[source]
+        for values in (tangential[:, 1], torque, spin):
+            values[image] = -values[source]
+    touching = contact_area > 0.0
+    capacity = friction_coefficient * normal
+    margin = np.where(capacity > 0.0, 1.0 - used / np.where(capacity > 0.0, capacity, 1.0),
+                      np.where(normal > 0.0, 0.0, 1.0))
     return BumpResults(
         centers=np.asarray(centers, dtype=float), normal_force=normal, tangential_force=tangential, torque=torque,
         spin_torque=spin, contact_area=contact_area, stick_area=stick_area,
@@ -154,7 +172,7 @@ def bump_shear_displacements(result) -> np.ndarray:
     bump = result.candidate_bump
     dofs = result.model.top.dofs[result.candidates, :2]
     areas = result.candidate_areas
-    mirror = np.argmin(np.linalg.norm(centers[:, None, :] - centers[None, :, :] * [1.0, -1.0], axis=2), axis=1)
+    mirror = mirror_bumps(centers)
     shears = np.full((len(result.increments), count, 2), np.nan)
     for number, increment in enumerate(result.increments):
         weights = np.where(increment.status != OPEN, increment.pressure * areas, 0.0)

@@ -41,6 +41,35 @@ def test_bump_sums_of_synthetic_points():
     assert flat["bump1_tangential_force_y"] == pytest.approx(0.05) and flat["bump0_slip_points"] == 1
 
 
+def test_half_model_bumps_equal_the_whole_model_of_a_symmetric_load():
+    # a 3 x 3 array under a load symmetric about y = 0 (shear along x, pressure bell per bump): summing the computed
+    # half (y > 0 points, and points on the plane with half their force and area, as a half mesh carries them) with
+    # multiplicity 2 must give every bump the whole model's values, the images of the computed bumps included
+    pitch = 4.0
+    centers = np.array([[x, y] for y in (-pitch, 0.0, pitch) for x in (-pitch, 0.0, pitch)])
+    grid = np.arange(-1.5, 1.51, 0.5)
+    offsets = np.array([[dx, dy] for dx in grid for dy in grid])
+    positions = np.vstack([center + offsets for center in centers])
+    positions = np.column_stack([positions, np.zeros(len(positions))])
+    bump = assign_bumps(positions, centers)
+    local = positions[:, :2] - centers[bump]
+    normal = np.exp(-(local**2).sum(axis=1)) * (1.0 + 0.05 * centers[bump, 0])
+    tangential = np.column_stack([0.3 * normal, 0.1 * normal * positions[:, 1]])          # y part odd in y
+    status = np.where((local**2).sum(axis=1) < 1.0, STICK, np.where(normal > 0.05, SLIP, OPEN))
+    areas = np.full(len(positions), 0.25)
+    lever = np.column_stack([-positions[:, 1], positions[:, 0]])
+    whole = bump_results(bump, centers, status, normal, tangential, areas, positions, lever, 0.5)
+    keep = positions[:, 1] >= 0.0
+    half = np.where(positions[keep, 1] == 0.0, 0.5, 1.0)
+    halved = bump_results(bump[keep], centers, status[keep], half * normal[keep], half[:, None] * tangential[keep],
+                          half * areas[keep], positions[keep], lever[keep], 0.5, multiplicity=2.0)
+    for name in ("normal_force", "tangential_force", "torque", "spin_torque", "contact_area", "stick_ratio",
+                 "gross_slip_margin"):
+        assert getattr(halved, name) == pytest.approx(getattr(whole, name), abs=SUM_TOLERANCE), name
+    off_plane = centers[:, 1] != 0.0
+    assert np.array_equal(halved.stick_points[off_plane], whole.stick_points[off_plane])
+
+
 def test_a_bump_at_gross_slip_has_no_margin_and_an_unloaded_one_all_of_it():
     centers = np.array([[0.0, 0.0], [10.0, 0.0]])
     positions = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [10.0, 0.0, 0.0]])
