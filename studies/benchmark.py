@@ -4,7 +4,7 @@ Reports medians over repeats of: mesh, assembly, factorization, compliance colum
 plain linear solve (assembly + factorization + one back-substitution), their ratio (target <= 3) and the peak
 memory of the process. Timings are never asserted in tests: the machines are shared and noisy.
 
-``--scaling`` times HCM-1 from 20k to 229k DOF (h = 0.2 ... 0.05 mm) against its limit, the cost of what no contact
+``--scaling`` times HCM-1 from 17k to 191k DOF (h = 0.25 ... 0.07 mm) against its limit, the cost of what no contact
 solver on this mesh can avoid: mesh + assembly + one factorization + one back-substitution per contact unknown (3 per
 point in contact at any converged increment). A back-substitution costs what one compliance column cost in the same
 solve (the columns' time over their number: on a shared machine a separate timing lands under another load; it is
@@ -36,7 +36,7 @@ from studies._output import write_csv_atomic, write_json_atomic
 NAME = "benchmark"
 SCENE = Path(__file__).parent / "scenes" / "hcm1.toml"
 TARGET_RATIO = 3.0
-SCALING_SIZES = (0.2, 0.14, 0.1, 0.07, 0.05)     # mm: 20k, 31k, 53k, 99k, 229k DOF
+SCALING_SIZES = (0.25, 0.2, 0.14, 0.1, 0.07)     # mm: 17k, 27k, 45k, 93k, 191k DOF (fine zone a/2 deep)
 SCALING_TARGET = 1.3
 RIGHT_HAND_SIDES = 256       # unit right-hand sides per timed multi-RHS solve (one chunk of the compliance columns)
 
@@ -44,7 +44,7 @@ RIGHT_HAND_SIDES = 256       # unit right-hand sides per timed multi-RHS solve (
 def add_arguments(parser) -> None:
     parser.add_argument("--repeats", type=int, default=3, help="solves per setting; medians are reported")
     parser.add_argument("--scaling", action="store_true",
-                        help="HCM-1 from 20k to 229k DOF: whole solve against mesh + assembly + factorization + one "
+                        help="HCM-1 from 17k to 191k DOF: whole solve against mesh + assembly + factorization + one "
                              "back-substitution per contact unknown")
     parser.add_argument("--factorizations", action="store_true",
                         help="compare the factorizations of standard P1, nodal-average K and its saddle-point "
