@@ -71,8 +71,11 @@ def _write_parquet_atomic(path: Path, rows: list[dict]) -> Path:
     import pyarrow as pa
     import pyarrow.parquet as pq
 
+    columns: dict = {}                   # every row's keys in first-seen order: pyarrow would take the first row's
+    for row in rows:                     # alone and drop, e.g., the items of a longer load path of a later case
+        columns.update(dict.fromkeys(row))
     with atomic_path(path) as temporary:
-        pq.write_table(pa.Table.from_pylist(rows), temporary)
+        pq.write_table(pa.Table.from_pylist([{name: row.get(name) for name in columns} for row in rows]), temporary)
     return path
 
 

@@ -166,7 +166,7 @@ def test_list_axes_are_exploded_into_typed_columns_and_plotted(tmp_path):
     from studies._sweep_table import case_row, plot_sweep, write_table
 
     matplotlib.use("Agg")
-    spec = _check(tmp_path, list={"contact.friction_coefficient": [0.3, 0.5], "load.1.force": [[0.03, 0.04], [0.05]]},
+    spec = _check(tmp_path, list={"contact.friction_coefficient": [0.3, 0.5], "load.1.force": [[0.05], [0.03, 0.04]]},
                   outputs=["stick_ratio@-1"])
     records = [dict(status="ok", increments=[dict(stick_ratio=0.9), dict(stick_ratio=0.5 + i)])
                for i in range(len(spec.cases))]
@@ -175,9 +175,9 @@ def test_list_axes_are_exploded_into_typed_columns_and_plotted(tmp_path):
     frame = pd.read_parquet(tmp_path / "table.parquet")
     # one float column per item of the shear path; the shorter path has no second item (null), nothing is text
     assert str(frame["load.1.force[0]"].dtype) == "float64" and "load.1.force" not in frame
-    by_mu = frame.set_index("contact.friction_coefficient")
-    assert list(by_mu.loc[0.3, "load.1.force[0]"].unique()) == [0.03]
-    assert by_mu.loc[0.5, "load.1.force[1]"].isna().all() and (by_mu.loc[0.3, "load.1.force[1]"] == 0.04).all()
+    by_mu = frame.set_index("contact.friction_coefficient")      # the first case's path is the shorter one
+    assert list(by_mu.loc[0.5, "load.1.force[0]"].unique()) == [0.03]
+    assert by_mu.loc[0.3, "load.1.force[1]"].isna().all() and (by_mu.loc[0.5, "load.1.force[1]"] == 0.04).all()
     figure = plot_sweep(rows, spec.axes, spec.zipped_axes, spec.outputs, "t")
     labels = {tick.get_text() for panel in figure.axes for tick in panel.get_xticklabels()}
     assert {"(0.03, 0.04)", "(0.05,)"} <= labels                      # the list axis is a labelled category
