@@ -18,7 +18,7 @@ from fem.compiled import njit_cached
 from controller._slip_frame import APPROACH, RELEASE, X_FRICTION, X_TIME, control_step, observe_frame
 
 from . import _kernel as K
-from ._sensing_kernel import couple_arm, sense_frame
+from ._sensing_kernel import load_ratio_noise, sense_frame
 
 # --- columns of the per-frame signals: command [N], u_x [mm], theta [rad], mu_hat, and a slip event's time [s] and
 # estimate (NaN: none in the frame)
@@ -50,14 +50,7 @@ def _frame_loads(sensing, buffers, noise, out, ratio_noise):
     u_x, theta, _ = sense_frame(normal, shear, tangential, noise, couple_law, operator, inverse, offset, quantization,
                                 threshold, region, node_x, node_y, node_floor, centres, table_force, table_cop,
                                 cop_gain, readings, load_force, load_ratio, force, shift, fit)
-    for f in range(2):
-        for i in range(count):
-            value = load_force[f, i]
-            if value > threshold:
-                arm = couple_arm(value, couple_law[0], couple_law[1], couple_law[2])
-                ratio_noise[f, i] = noise_std * couple_noise[i] / (arm * value)
-            else:
-                ratio_noise[f, i] = 0.0
+    load_ratio_noise(load_force, threshold, couple_law, noise_std, couple_noise, ratio_noise)
     return u_x, theta
 
 

@@ -149,9 +149,9 @@ class SensingChain:
             self.calibration.gain, readings, normal, ratio, force, shift, fit)
         fitted = fit[:, 0] >= 2
         loaded = normal > threshold
-        safe = np.where(loaded, normal, 1.0)
-        ratio_noise = np.where(loaded, self.array.noise_std * self._couple_noise
-                               / (self.tip.parameters.couple_arm_at(safe) * safe), 0.0)
+        ratio_noise = np.empty((2, count))
+        S.load_ratio_noise(normal, threshold, self._couple_law, float(self.array.noise_std), self._couple_noise,
+                           ratio_noise)
         return SensorFrame(force, force > threshold, shift, fit[:, 2:], np.where(fitted, fit[:, 1], 0.0), fitted,
                            u_x, theta, contacts, normal, ratio, loaded, ratio_noise)
 

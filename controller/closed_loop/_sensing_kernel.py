@@ -121,6 +121,20 @@ def couple_arm(bump_force, arm, slope, limit):
 
 
 @njit_cached
+def load_ratio_noise(load_force, threshold, couple_law, noise_std, couple_noise, out):
+    """Noise (2, k) [-] of each bump's load ratio into ``out``: the node noise ``noise_std`` [N] read back through the
+    couple, noise_std c_i / (h(P_i) P_i) for a loaded bump (P_i > ``threshold``), 0 for the others."""
+    for f in range(load_force.shape[0]):
+        for i in range(load_force.shape[1]):
+            value = load_force[f, i]
+            if value > threshold:
+                out[f, i] = noise_std * couple_noise[i] / (couple_arm(value, couple_law[0], couple_law[1],
+                                                                      couple_law[2]) * value)
+            else:
+                out[f, i] = 0.0
+
+
+@njit_cached
 def sense_loads(normal, shear, tangential, noise, couple_law, operator, inverse, offset, quantization, threshold,
                 readings, load_force, load_ratio):
     """Readings of both fingertips and the per-bump loads read back from them (``SensingChain.sense``).
