@@ -98,10 +98,13 @@ def assign_bumps(positions: np.ndarray, centers: np.ndarray) -> np.ndarray:
     return np.argmin((offsets**2).sum(axis=2), axis=1)
 
 
-def mirror_bumps(centers: np.ndarray) -> np.ndarray:
-    """Index (k,) of each bump's mirror image in y = 0 (itself for a bump on the plane)."""
+def half_model_bumps(centers: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The bumps of a mirror half model (y >= 0 computed): each bump's mirror image in y = 0 (k,) (itself on the
+    plane), the bumps cut by the plane (k,) bool, and the images that are not computed (k,) bool (y < 0)."""
     centers = np.asarray(centers, dtype=float)
-    return np.argmin(np.linalg.norm(centers[:, None, :] - centers[None, :, :] * [1.0, -1.0], axis=2), axis=1)
+    mirror = np.argmin(np.linalg.norm(centers[:, None, :] - centers[None, :, :] * [1.0, -1.0], axis=2), axis=1)
+    cut = mirror == np.arange(len(centers))
+    return mirror, cut, (centers[:, 1] < 0.0) & ~cut
 
 
 def bump_results(bump: np.ndarray, centers: np.ndarray, status: np.ndarray, normal_force: np.ndarray,
@@ -131,14 +134,12 @@ def bump_results(bump: np.ndarray, centers: np.ndarray, status: np.ndarray, norm
     used = per_bump(np.linalg.norm(tangential_force, axis=1))
     counts = [np.bincount(bump[status == code], minlength=count) for code in (OPEN, STICK, SLIP)]
     if multiplicity != 1.0:
-        mirror = mirror_bumps(centers)
-        cut = mirror == np.arange(count)                       # on the plane: half of the bump computed
+        mirror, cut, image = half_model_bumps(centers)          # cut: half of the bump computed
         for values in (normal, tangential[:, 0], contact_area, stick_area, used):
             values[cut] *= multiplicity
         for values in (tangential[:, 1], torque, spin):
             values[cut] = 0.0
-        image = (np.asarray(centers, dtype=float)[:, 1] < 0.0) & ~cut        # not computed: its mirror's values
-        source = mirror[image]
+        source = mirror[image]                                  # an image that is not computed: its mirror's values
         for values in (normal, tangential[:, 0], contact_area, stick_area, used, *counts):
             values[image] = values[source]
         for values in (tangential[:, 1], torque, spin):
@@ -164,15 +165,17 @@ def bump_shear_displacements(result) -> np.ndarray:
 
     It is the bump's elastic deformation, not the body's motion: a bump stuck to the body moves with it, one that
     slides (partly or as a whole) lags it by its slip. ``result``: a ``contact.result.ContactResult`` of a bump
-    array (``candidate_bump``, ``bump_centers``). In a mirror half model (y >= 0 computed) a bump on the other side
-    takes its mirror's value with y negated. A bump without contact in an increment is NaN there.
+    array (``candidate_bump``, ``bump_centers``). In a mirror half model (y >= 0 computed, ``half_model_bumps``) a
+    bump on the other side takes its mirror's value with y negated, and a bump cut by the plane has no y part (by
+    symmetry). A bump without contact in an increment is NaN there.
     """
     centers = np.asarray(result.bump_centers, dtype=float)
     count = len(centers)
     bump = result.candidate_bump
     dofs = result.model.top.dofs[result.candidates, :2]
     areas = result.candidate_areas
-    mirror = mirror_bumps(centers)
+    half = bool(result.mesh_info.get("half_model"))
+    mirror, cut, image = half_model_bumps(centers)
     shears = np.full((len(result.increments), count, 2), np.nan)
     for number, increment in enumerate(result.increments):
         weights = np.where(increment.status != OPEN, increment.pressure * areas, 0.0)
@@ -182,7 +185,7 @@ def bump_shear_displacements(result) -> np.ndarray:
         for axis in range(2):
             weighted = np.bincount(bump, weights=weights * tangential[:, axis], minlength=count)
             shears[number, touching, axis] = weighted[touching] / total[touching]
-        if result.mesh_info.get("half_model"):
-            other = ~touching & touching[mirror]
-            shears[number, other] = shears[number, mirror[other]] * [1.0, -1.0]
+        if half:
+            shears[number, cut & touching, 1] = 0.0
+            shears[number, image] = shears[number, mirror[image]] * [1.0, -1.0]
     return shears
