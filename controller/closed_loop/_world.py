@@ -106,6 +106,7 @@ class GraspWorld:
                                                                         "table_contact")])
         self.object_body, self.arm_body = self.bridge.object_id, self.bridge.arm_id
         self.schedule = self._schedule()
+        self._phase_ends = np.array([end for end, _ in self.schedule])        # [s]
         control, sensor = self.grasp.parameters.sample_rate_hz, self.sensing.array.sample_rate_hz
         for name, fast, slow in (("physics_rate_hz", settings.physics_rate_hz, sensor),
                                  ("the grasp-force loop rate", control, sensor)):
@@ -132,12 +133,12 @@ class GraspWorld:
     def _phase_index(self, times) -> np.ndarray:
         """Index into the schedule of the phase at each of ``times`` [s] (the last phase's end and beyond: the
         last)."""
-        ends = np.array([end for end, _ in self.schedule])
+        ends = self._phase_ends
         return np.minimum(np.searchsorted(ends, times, side="right"), len(ends) - 1)
 
     def _lift_heights_m(self, times) -> np.ndarray:
         """Lift target [m] at ``times`` [s]: a minimum-jerk rise in LIFT, held in HOLD, lowered in PLACE."""
-        ends = np.array([end for end, _ in self.schedule])
+        ends = self._phase_ends
         starts = np.concatenate([[0.0], ends[:-1]])
         index = self._phase_index(times)
         progress = np.clip((times - starts[index]) / (ends[index] - starts[index]), 0.0, 1.0)
