@@ -16,7 +16,13 @@ stick points) and evaluates the fit there and one ring of points beyond, (3) cor
 averaging, which flattens the square root next to the boundary: a nodal force is the integral of the field times
 the point's hat function, so the fitted field's own hat averages are computed and the difference to its point
 values is added to the data before refitting, and (4) takes the zero contour of the piecewise-linear interpolant
-of the fitted square on the surface triangulation as the boundary, with areas cut exactly per triangle.
+of the fitted square on the surface triangulation as the boundary, with areas cut exactly per triangle. Each stick
+zone is fitted over patches of 40 or 80 points, whichever has the lesser leave-one-out error (the stick field is the
+difference of two nodal forces and scatters more than the pressure; a wide patch averages that out under shear but
+bends towards the cone that |q| ~ r makes at the centre under twist), and its fit is capped at zero at the points the
+solve found slipping: the recovered stick boundary lies below the element size, but never beyond a point that slips
+(without the cap the fit of a stick zone a few points across could reach past them: HCM-1 at nu = 0.49, h = a/5,
+Q/(mu P) = 0.9 put c/a 0.017 above the reference). docs/coupled_reference.md gives the measurements.
 
 The area weights make the fit conserve force where the nodal pressure of linear tetrahedra oscillates between
 points of different valence; the square root of the first fit of p^2 (inside the recovered edge) is the recovered
@@ -36,6 +42,11 @@ __all__ = ["RecoveredContact", "recover_contact", "moving_least_squares", "lumpe
            "surface_triangles"]
 
 PATCH_POINTS = 40          # sources per moving least-squares patch (a quadratic has 6 coefficients)
+# mu p - |q| is the difference of two nodal forces of similar size: on HCM-1 at h = a/5 it scatters about a smooth
+# radial fit by 7-11 % (rms) of its peak, the pressure on the same points by 2.5-6 %, and a wider patch averages that
+# out where the field is smooth (a quadratic under shear). Under twist it has a cone at the centre (|q| grows like r),
+# which a wide patch bends the boundary fit towards. So each stick zone takes the patch of least leave-one-out error.
+STICK_PATCH_CHOICES = (PATCH_POINTS, 2 * PATCH_POINTS)
 CORRECTION_STEPS = 4       # refits with the nodal-averaging correction; the boundary moves < 1e-4 a after 3
 
 
@@ -58,25 +69,32 @@ class RecoveredContact:
 
 def moving_least_squares(source_xy: np.ndarray, source_values: np.ndarray, target_xy: np.ndarray,
                          source_weights: np.ndarray | None = None, patch_points: int = PATCH_POINTS,
-                         reach: float = math.inf) -> np.ndarray:
+                         reach: float = math.inf, source_owner: np.ndarray | None = None,
+                         target_owner: np.ndarray | None = None) -> np.ndarray:
     """Values at ``target_xy`` (m, 2) of local quadratic fits to scattered ``source_values`` (n,) at ``source_xy``.
 
     Each target takes its ``patch_points`` nearest sources within ``reach`` [mm], weights them by
     w = source_weight (1 - d^2/rho^2)^2, rho 1.5 x the distance to the farthest, and fits
     a + b x + c y + d x^2 + e x y + f y^2 centred on the target by weighted least squares (a plane where fewer than
     10 sources are in reach, the mean where fewer than 3). Returns the fitted value a at each target.
+    With ``source_owner`` (n,) and ``target_owner`` (m,) ids, each target leaves out the sources it owns and takes
+    that many more neighbours (up to two): the leave-one-out fit.
     """
     source_xy = np.asarray(source_xy, float)
     target_xy = np.asarray(target_xy, float)
     n = source_xy.shape[0]
     if n == 0:
         raise ValueError("moving_least_squares needs at least one source point")
-    k = min(patch_points, n)
+    leave_out = source_owner is not None and target_owner is not None
+    k = min(patch_points + (2 if leave_out else 0), n)
     distance, index = cKDTree(source_xy).query(target_xy, k=k, distance_upper_bound=reach)
     distance, index = distance.reshape(len(target_xy), k), index.reshape(len(target_xy), k)     # (m, k)
     found = np.isfinite(distance)
     if not np.all(found[:, 0]):
         raise ValueError(f"a target point has no source within reach={reach} mm")
+    if leave_out:
+        kept = found & (np.asarray(source_owner)[np.where(found, index, 0)] != np.asarray(target_owner)[:, None])
+        found = np.where(kept.any(axis=1, keepdims=True), kept, found)    # all owned: fit them rather than nothing
     index = np.where(found, index, 0)
     distance = np.where(found, distance, 0.0)
     rho = 1.5 * distance.max(axis=1, keepdims=True) + 1e-300
@@ -152,10 +170,19 @@ def _connected_parts(triangles: np.ndarray, inside: np.ndarray) -> list[np.ndarr
     return [np.flatnonzero(inside & (labels == label)) for label in np.unique(labels[inside])]
 
 
-def _recovered_square(xy, triangles, areas, values, inside, mirror_y) -> tuple[np.ndarray, np.ndarray]:
+def _leave_one_out_error(source_xy, square, source_areas, owner, n_part, patch_points) -> float:
+    """Area-weighted rms of the leave-one-out residuals of the fit of ``square`` at the part's own n_part points."""
+    fitted = moving_least_squares(source_xy, square, source_xy[:n_part], source_areas, patch_points,
+                                  source_owner=owner, target_owner=np.arange(n_part))
+    return float(np.sqrt(np.average((fitted - square[:n_part]) ** 2, weights=source_areas[:n_part])))
+
+
+def _recovered_square(xy, triangles, areas, values, inside, mirror_y,
+                      patch_choices: tuple[int, ...] = (PATCH_POINTS,)) -> tuple[np.ndarray, np.ndarray]:
     """Recovered square of the field ``values`` (positive where ``inside``) at the inside points and one ring
     around them (-inf elsewhere): with the nodal-averaging correction, and the first fit without it. Each
-    connected part (the patch of one bump of an array) is fitted from its own points only."""
+    connected part (the patch of one bump of an array) is fitted from its own points only, with the patch size of
+    ``patch_choices`` whose leave-one-out error on the part's data is least (the first on a tie)."""
     recovered = np.full(len(xy), -np.inf)
     first_fit = recovered.copy()
     for part in _connected_parts(triangles, inside):
@@ -171,12 +198,21 @@ def _recovered_square(xy, triangles, areas, values, inside, mirror_y) -> tuple[n
             source_xy = np.concatenate([source_xy, source_xy[mirrored] * [1.0, -1.0]])
             source_areas = np.concatenate([source_areas, source_areas[mirrored]])
         measured = values[part]
+        owner = np.arange(len(source_xy))         # a mirror image is left in, as the whole body's own point would be
+        patch_points = patch_choices[0]
+        if len(patch_choices) > 1:
+            square = measured * np.abs(measured)
+            square = np.concatenate([square, square[mirrored]]) if mirror_y else square
+            errors = [_leave_one_out_error(source_xy, square, source_areas, owner, len(part), choice)
+                      for choice in patch_choices]
+            floor = 1e-9 * float(np.abs(square).max())         # below it, round-off: a tie, the first choice
+            patch_points = patch_choices[int(np.argmin(np.maximum(errors, floor)))]
         data = measured
         for step in range(CORRECTION_STEPS + 1):
             square = data * np.abs(data)
             if mirror_y:
                 square = np.concatenate([square, square[mirrored]])
-            recovered[ring] = moving_least_squares(source_xy, square, xy[ring], source_areas)
+            recovered[ring] = moving_least_squares(source_xy, square, xy[ring], source_areas, patch_points)
             if step == 0:
                 first_fit[ring] = recovered[ring]
             averaged = lumped_average(xy, ring_triangles, np.where(ring, recovered, 0.0))[part]
@@ -202,7 +238,7 @@ def recover_contact(xy: np.ndarray, triangles: np.ndarray, areas: np.ndarray, no
     status : (n,) OPEN / STICK / SLIP per point; friction_coefficient : mu [-]
     mirror_y : the points are the half y >= 0 of a body mirror-symmetric about y = 0 (areas count twice)
     """
-    from contact._newton import OPEN, STICK
+    from contact._newton import OPEN, SLIP, STICK
 
     xy = np.asarray(xy, float)[:, :2]
     triangles = np.asarray(triangles)
@@ -219,7 +255,11 @@ def recover_contact(xy: np.ndarray, triangles: np.ndarray, areas: np.ndarray, no
     in_contact = (status != OPEN) & (pressure > 0)
     stick = (status == STICK) & in_contact & (deficit > 0)
     square_pressure, fitted_pressure = _recovered_square(xy, triangles, areas, pressure, in_contact, mirror_y)
-    square_deficit, _ = _recovered_square(xy, triangles, areas, deficit, stick, mirror_y)
+    square_deficit, _ = _recovered_square(xy, triangles, areas, deficit, stick, mirror_y, STICK_PATCH_CHOICES)
+    # the recovered stick zone holds no point that the solve found slipping: where the fit extrapolates a positive
+    # deficit to a slip point, the boundary is put at that point (the nodal solution's own bound on it)
+    slipping = (status == SLIP) & np.isfinite(square_deficit)
+    square_deficit[slipping] = np.minimum(square_deficit[slipping], 0.0)
     # mu p - |q| <= mu p: the stick zone lies inside the contact, also where too few points make the fits loose
     bound = square_pressure.copy()
     finite = np.isfinite(bound)

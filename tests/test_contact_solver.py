@@ -115,8 +115,9 @@ def test_stick_ratio_under_twist_follows_lubkin(twist_result):
 
 RECOVERED_STICK_TOLERANCE = 0.01
 # Recovered c/a (contact.recovery) against the coupled half-space reference on the same load path: measured on
-# HCM-1 at h = a/5 (0.2 mm) max 0.012 (P1, nu = 0.45; scattered +-0.01 over the increments), 0.004 at a/10
-# (docs/coupled_reference.md); here 0.007. The tolerance is issue 19's target at h = a/5; nodal-area c/a at this size is off by up to 0.045.
+# HCM-1 at h = a/5 (0.2 mm) max 0.0023 (P1, nu = 0.45) and 0.0091 (nodal-average P1, nu = 0.49), 0.005 at a/10
+# (docs/coupled_reference.md); here 0.0052. The tolerance is issue 19's target at h = a/5; nodal-area c/a at this
+# size is off by up to 0.035.
 
 
 @pytest.fixture(scope="module")
@@ -170,10 +171,12 @@ def test_recovered_peak_pressure_within_two_percent_of_hertz_at_a_over_10():
 
 
 def test_recovered_stick_ratio_under_twist_follows_lubkin(twist_result):
-    # the deficit mu p - |q| vanishes like a square root at Lubkin's stick edge too; at h = a/5 the recovered c/a is
-    # within 0.008 at c/a = 0.9 and 0.7 and 0.025 at 0.5 (nodal 0.024): the nodal tolerance +-h/2 holds for both
+    # the deficit mu p - |q| vanishes like a square root at Lubkin's stick edge too. Measured at h = a/5: recovered
+    # c/a within 0.005 at c/a = 0.9 and 0.7 and 0.024 at 0.5 (stick radius 2.7 h; nodal 0.024 / 0.006 / 0.012);
+    # at c/a = 0.5 it reads -0.008 / -0.024 / +0.002 / -0.003 at h = 0.3 / 0.2 / 0.14 / 0.1 mm: 0.03, a third of the
+    # nodal band +-h/(2a) = 0.089. (A stick patch of 80 points alone gave -0.017 at 0.14 mm: the cone of |q| ~ r.)
     for expected, inc in zip(TWIST_STICK, twist_result.increments[1:]):
-        assert inc.recovered_stick_ratio == pytest.approx(expected, abs=0.5 * H / inc.contact_radius)
+        assert inc.recovered_stick_ratio == pytest.approx(expected, abs=0.03)
 
 
 @pytest.fixture(scope="module")
@@ -188,10 +191,10 @@ def nearly_incompressible_result():
 
 
 def test_recovered_stick_ratio_follows_cattaneo_mindlin_at_nu_049(nearly_incompressible_result):
-    # measured at h = a/5: recovered within 0.011 of Cattaneo-Mindlin (nodal 0.021); on HCM-1 max 0.015 at a/5,
-    # 0.003 at a/10. The coupled reference moves c/a by < 0.003 at nu = 0.49, included in 0.02.
+    # measured at h = a/5: recovered within 0.0074 of Cattaneo-Mindlin (nodal 0.021); on HCM-1 0.0091 against the
+    # coupled reference at a/5, 0.003 at a/7. Issue 19's 0.01 plus the coupling offset of c/a at nu = 0.49 (< 0.003).
     for ratio, inc in zip(SHEAR_RATIOS, nearly_incompressible_result.increments[1:]):
-        assert inc.recovered_stick_ratio == pytest.approx(float(stick_ratio_translational(ratio, 2)), abs=0.02)
+        assert inc.recovered_stick_ratio == pytest.approx(float(stick_ratio_translational(ratio, 2)), abs=0.013)
 
 
 def test_frictionless_contact_carries_no_tangential_force():
@@ -281,3 +284,20 @@ def test_substeps_start_at_the_level_an_earlier_increment_needed():
     second = solve_with_substeps(solve, first[0], BodyControl(normal_force=1.0, angle=0.8), lever, start_level=2)
     assert second[0].angle == pytest.approx(0.8) and second[3:] == (4, 2)
     assert attempts == pytest.approx([0.1] * 4)   # no coarser attempt before the quarters
+
+
+@pytest.mark.parametrize("nu, volumetric", [(0.45, "standard"), (0.49, "nodal_average")])
+def test_hcm1_recovers_the_stick_ratio_within_001_of_the_coupled_reference_at_a_over_5(nu, volumetric):
+    # Issue 19's target on HCM-1's own path (frictional press, 5 shear increments to Q/(mu P) = 0.9) at h = a/5.
+    # Measured against a/21 cells: max 0.0023 at nu = 0.45 and 0.0091 at nu = 0.49 (the last increment, where the
+    # stick radius is 2.4 h); the a/15 reference used here is within 0.001 of a/21. Nodal-area c/a: 0.015 / 0.035.
+    # Before the stick patch was chosen by leave-one-out error and capped at slipping points: 0.0121 / 0.0166.
+    from contact.halfspace import coupled_reference
+    from studies.convergence import DEFAULT_REFERENCE_SPACING, hcm1_case_scene
+
+    problem, ratios = hcm1_case_scene(0.2, 1, 5, nu, volumetric)
+    result = solve_scene(problem, cache_compliance=False)
+    reference = coupled_reference(problem, DEFAULT_REFERENCE_SPACING)
+    assert len(result.increments) == len(reference) == len(ratios) + 1
+    for inc, expected in zip(result.increments[1:], reference[1:]):
+        assert inc.recovered_stick_ratio == pytest.approx(expected.recovered.stick_ratio, abs=RECOVERED_STICK_TOLERANCE)

@@ -66,6 +66,21 @@ def test_moving_least_squares_reproduces_quadratics():
     np.testing.assert_allclose(fitted, quadratic(target), atol=1e-10)     # a least-squares solve: cond ~ 1e2
 
 
+def test_leave_one_out_fit_does_not_see_the_left_out_point():
+    # a quadratic with one corrupted value: the leave-one-out fit at that point is the quadratic (least squares over
+    # the others is exact), the ordinary fit is pulled towards the corrupted value
+    rng = np.random.default_rng(7)
+    source = rng.uniform(-1, 1, (120, 2))
+    values = 0.5 + source[:, 0] ** 2 - 0.3 * source[:, 0] * source[:, 1]
+    corrupted = values.copy()
+    corrupted[0] += 10.0
+    owner = np.arange(120)
+    left_out = moving_least_squares(source, corrupted, source[:1], patch_points=40, source_owner=owner,
+                                    target_owner=owner[:1])
+    assert left_out[0] == pytest.approx(values[0], abs=1e-10)
+    assert moving_least_squares(source, corrupted, source[:1], patch_points=40)[0] > values[0] + 0.1
+
+
 def test_lumped_average_of_a_constant_is_the_constant():
     xy, triangles = square_grid(0.1, 1.0, shift=(0.03, 0.01))
     np.testing.assert_allclose(lumped_average(xy, triangles, np.full(len(xy), 4.0)), 2.0, atol=EXACT)
@@ -122,3 +137,18 @@ def test_mismatched_lengths_are_refused():
     xy, triangles, areas, normal, tangential, status = sampled_cattaneo_mindlin(1 / 4, 0.6)
     with pytest.raises(ValueError, match="one entry per point"):
         recover_contact(xy, triangles, areas[:-1], normal, tangential, status, 0.5)
+
+
+def test_recovered_stick_zone_stops_at_points_the_solve_found_slipping():
+    # A solve on a coarse mesh can find a stick zone smaller than the field's own: here the Cattaneo-Mindlin field
+    # of c/a = 0.6 with every point beyond r = 0.35 slipping. The quadratic fit over the stick points is exact and
+    # reaches c = 0.6, past the slipping points; the recovered zone must stay within the stick points' triangles.
+    xy, triangles, areas, normal, tangential, status = sampled_cattaneo_mindlin(1 / 8, 0.6)
+    slipping = (status == STICK) & (np.hypot(xy[:, 0], xy[:, 1]) > 0.35)
+    status = np.where(slipping, SLIP, status)
+    tangential = np.where(slipping[:, None], [0.5, 0.0] * normal[:, None], tangential)     # on the cone: |q| = mu p
+    recovered = recover_contact(xy, triangles, areas, normal, tangential, status, 0.5)
+    touching = np.any(status[triangles] == STICK, axis=1)
+    reachable = positive_area(xy[triangles[touching]], np.ones((touching.sum(), 3))).sum()
+    assert recovered.stick_area <= reachable * (1 + EXACT)
+    assert recovered.stick_ratio < 0.6 - 1 / 16                 # the uncapped fit would put the edge at 0.6
