@@ -225,7 +225,7 @@ class MeshSettings:
     (P1 only: average-nodal-pressure tets, locking-free for nu -> 0.5; fem.elasticity).
     """
 
-    size_contact: float = 0.2        # mm; a/5 for HCM-1 (recovered c/a within 0.012, docs/coupled_reference.md)
+    size_contact: float = 0.2        # mm; a/5 for HCM-1 (recovered c/a within 0.0023, docs/coupled_reference.md)
     size_far: float = 4.0
     order: int = 1
     fine_radius: float | None = None

@@ -9,7 +9,7 @@ contact radius and peak pressure, nodal and recovered, against Hertz; tangential
 element-size series at nu = 0.49 with the locking-free nodal-average P1 shows the nearly uncoupled case. Wall and
 CPU time are the whole solve (mesh, assembly, factorization, contact path).
 
-Settings: the default runs HCM-1 at h = 0.35 ... 0.14 mm (the knee, 0.14 mm since the deeper fine zone, and coarser),
+Settings: the default runs HCM-1 at h = 0.35 ... 0.14 mm (the knee is 0.2 mm = a/5; one size finer, two coarser),
 P2 at one size, 1 and 5 shear increments, nu = 0.49 at 0.35 / 0.2 / 0.14 mm, the coupled reference on a/15 cells
 and the 3x3 fingertip down to 0.4 mm: 136 s on 2 cores (measured). ``--full`` adds HCM-1 at 0.1 and 0.07 mm (a/10,
 where issue 19's peak-pressure target is set; up to 191k DOF), P2 at 0.17 and 0.12 mm, 2 and 10 increments at
