@@ -152,9 +152,10 @@ def mesh_quality(nodes: np.ndarray, tets: np.ndarray) -> MeshQuality:
 
 
 # tets per h^3 of volume (h the target edge length), measured with size_cells(): graded bisection of HCM-1's block
-# 4.8-8.3 x 6 (it halves edges, so most are shorter than their target), gmsh 0.65-0.75 x 6 on the Fig. 4 cap and the
-# 3x3 array; each taken near its upper end, so that the estimate errs toward too many
-BISECTION_TETS_PER_CELL = 50.0
+# 24-34 (it halves edges, so most are shorter than their target; h = 0.35 ... 0.1 mm with the fine zone a/2 deep, and
+# the stability study's block, P1 and P2), gmsh 0.65-0.75 x 6 on the Fig. 4 cap and the 3x3 array; each taken near
+# its upper end, so that the estimate errs toward too many
+BISECTION_TETS_PER_CELL = 35.0
 GMSH_TETS_PER_CELL = 4.5
 NODES_PER_TET = 0.2          # 3.9-5.4 tets per node on the same meshes
 

@@ -301,3 +301,19 @@ def test_hcm1_recovers_the_stick_ratio_within_001_of_the_coupled_reference_at_a_
     assert len(result.increments) == len(reference) == len(ratios) + 1
     for inc, expected in zip(result.increments[1:], reference[1:]):
         assert inc.recovered_stick_ratio == pytest.approx(expected.recovered.stick_ratio, abs=RECOVERED_STICK_TOLERANCE)
+
+
+@pytest.mark.parametrize("size_contact", [0.35, 0.2])
+def test_resource_estimate_errs_toward_too_many_but_not_by_much(size_contact):
+    # The estimate refuses meshes that cannot fit the machine before meshing them, so it should err toward too many
+    # DOF, but not so far that it refuses what fits: it once put HCM-1 at h = 0.07 mm at 4.4e5 DOF and 23 GB (measured
+    # 1.9e5 DOF and 2.5 GB). Measured now on HCM-1 at 0.35 ... 0.07 mm: 0.94-1.6x the DOF, 1.5-3x the peak memory.
+    from contact.limits import estimate_resources
+    from contact.solver import prepare
+    from studies.convergence import hcm1_case_scene
+
+    problem = hcm1_case_scene(size_contact, 1, 1)[0]
+    prepared = prepare(problem)
+    estimate = estimate_resources(problem, prepared.fine_radius, prepared.half)
+    assert 0.8 * prepared.mesh_info["dofs"] <= estimate["dofs"] <= 2.0 * prepared.mesh_info["dofs"]
+    assert 0.8 * prepared.mesh_info["elements"] <= estimate["tets"] <= 2.0 * prepared.mesh_info["elements"]
