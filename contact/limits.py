@@ -36,11 +36,13 @@ SLIDING_WARN = 0.1           # slid distance / a: the gap paired at the start is
 SLIDING_REFUSE = 0.5         # slid distance / a: half the contact has moved onto other body points
 # peak memory = interpreter and libraries + factor (fill ~ n^(4/3)) + dense surface compliance. Measured peaks
 # (resident set, whole process): HCM-1 at h = 0.2 / 0.1 / 0.07 mm 0.46 / 1.31 / 2.53 GB at 27k / 93k / 191k DOF;
-# the saddle-point system of nodal-average P1 1.6x standard P1 on the same mesh (0.95 / 0.60 GB at 42k DOF).
-# The factor term is calibrated on the largest with a margin of 1.5, so the estimate errs toward too much.
+# the stability block at h = 0.15 mm 0.60 GB (P1, 42.6k DOF), 1.21 GB (P2, 76.7k), 0.95 GB (nodal-average P1, 42.1k:
+# its saddle-point system takes 2.2x the P1 memory above the 0.3 GB base); the Fig. 4 cap 0.41 GB (15.7k), the 3x3
+# array 0.83 GB (37.2k). The factor term is calibrated on the largest with a margin of 1.5; with the mesh estimate the
+# whole estimate is 1.7-5x these peaks (the most for the array's worst-case compliance and the finest HCM-1 mesh).
 BASE_BYTES = 0.3e9
 BYTES_PER_FACTOR_DOF = 1.5 * 2.53e9 / 190.6e3**(4 / 3)
-SADDLE_POINT_MEMORY = 1.6
+SADDLE_POINT_MEMORY = 2.2
 
 
 class PhysicalLimitError(ValueError):

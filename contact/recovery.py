@@ -69,32 +69,29 @@ class RecoveredContact:
 
 def moving_least_squares(source_xy: np.ndarray, source_values: np.ndarray, target_xy: np.ndarray,
                          source_weights: np.ndarray | None = None, patch_points: int = PATCH_POINTS,
-                         reach: float = math.inf, source_owner: np.ndarray | None = None,
-                         target_owner: np.ndarray | None = None) -> np.ndarray:
+                         reach: float = math.inf, leave_out: np.ndarray | None = None) -> np.ndarray:
     """Values at ``target_xy`` (m, 2) of local quadratic fits to scattered ``source_values`` (n,) at ``source_xy``.
 
     Each target takes its ``patch_points`` nearest sources within ``reach`` [mm], weights them by
     w = source_weight (1 - d^2/rho^2)^2, rho 1.5 x the distance to the farthest, and fits
     a + b x + c y + d x^2 + e x y + f y^2 centred on the target by weighted least squares (a plane where fewer than
     10 sources are in reach, the mean where fewer than 3). Returns the fitted value a at each target.
-    With ``source_owner`` (n,) and ``target_owner`` (m,) ids, each target leaves out the sources it owns and takes
-    that many more neighbours (up to two): the leave-one-out fit.
+    With ``leave_out`` (m,) source indices, each target is fitted without that source (from its ``patch_points``
+    nearest others): the leave-one-out fit. A lone source cannot be left out and fits itself.
     """
     source_xy = np.asarray(source_xy, float)
     target_xy = np.asarray(target_xy, float)
     n = source_xy.shape[0]
     if n == 0:
         raise ValueError("moving_least_squares needs at least one source point")
-    leave_out = source_owner is not None and target_owner is not None
-    k = min(patch_points + (2 if leave_out else 0), n)
+    k = min(patch_points + (0 if leave_out is None else 1), n)
     distance, index = cKDTree(source_xy).query(target_xy, k=k, distance_upper_bound=reach)
     distance, index = distance.reshape(len(target_xy), k), index.reshape(len(target_xy), k)     # (m, k)
     found = np.isfinite(distance)
     if not np.all(found[:, 0]):
         raise ValueError(f"a target point has no source within reach={reach} mm")
-    if leave_out:
-        kept = found & (np.asarray(source_owner)[np.where(found, index, 0)] != np.asarray(target_owner)[:, None])
-        found = np.where(kept.any(axis=1, keepdims=True), kept, found)    # all owned: fit them rather than nothing
+    if leave_out is not None and n > 1:
+        found &= index != np.asarray(leave_out)[:, None]
     index = np.where(found, index, 0)
     distance = np.where(found, distance, 0.0)
     rho = 1.5 * distance.max(axis=1, keepdims=True) + 1e-300
@@ -170,11 +167,14 @@ def _connected_parts(triangles: np.ndarray, inside: np.ndarray) -> list[np.ndarr
     return [np.flatnonzero(inside & (labels == label)) for label in np.unique(labels[inside])]
 
 
-def _leave_one_out_error(source_xy, square, source_areas, owner, n_part, patch_points) -> float:
-    """Area-weighted rms of the leave-one-out residuals of the fit of ``square`` at the part's own n_part points."""
+def _leave_one_out_error(source_xy, square, source_areas, part_areas, patch_points) -> float:
+    """Area-weighted rms of the leave-one-out residuals of the fit of ``square`` at the part's own points (the first
+    len(part_areas) sources; a mirror image stays in, as the whole body's own point would). Weighted by the points'
+    own areas, not the doubled ones of points on a mirror plane, so that a half model scores as its whole body."""
+    n_part = len(part_areas)
     fitted = moving_least_squares(source_xy, square, source_xy[:n_part], source_areas, patch_points,
-                                  source_owner=owner, target_owner=np.arange(n_part))
-    return float(np.sqrt(np.average((fitted - square[:n_part]) ** 2, weights=source_areas[:n_part])))
+                                  leave_out=np.arange(n_part))
+    return float(np.sqrt(np.average((fitted - square[:n_part]) ** 2, weights=part_areas)))
 
 
 def _recovered_square(xy, triangles, areas, values, inside, mirror_y,
@@ -198,12 +198,11 @@ def _recovered_square(xy, triangles, areas, values, inside, mirror_y,
             source_xy = np.concatenate([source_xy, source_xy[mirrored] * [1.0, -1.0]])
             source_areas = np.concatenate([source_areas, source_areas[mirrored]])
         measured = values[part]
-        owner = np.arange(len(source_xy))         # a mirror image is left in, as the whole body's own point would be
         patch_points = patch_choices[0]
         if len(patch_choices) > 1:
             square = measured * np.abs(measured)
             square = np.concatenate([square, square[mirrored]]) if mirror_y else square
-            errors = [_leave_one_out_error(source_xy, square, source_areas, owner, len(part), choice)
+            errors = [_leave_one_out_error(source_xy, square, source_areas, areas[part], choice)
                       for choice in patch_choices]
             floor = 1e-9 * float(np.abs(square).max())         # below it, round-off: a tie, the first choice
             patch_points = patch_choices[int(np.argmin(np.maximum(errors, floor)))]

@@ -11,10 +11,10 @@ CPU time are the whole solve (mesh, assembly, factorization, contact path).
 
 Settings: the default runs HCM-1 at h = 0.35 ... 0.14 mm (the knee is 0.2 mm = a/5; one size finer, two coarser),
 P2 at one size, 1 and 5 shear increments, nu = 0.49 at 0.35 / 0.2 / 0.14 mm, the coupled reference on a/15 cells
-and the 3x3 fingertip down to 0.4 mm: 136 s on 2 cores (measured). ``--full`` adds HCM-1 at 0.1 and 0.07 mm (a/10,
+and the 3x3 fingertip down to 0.4 mm: 94 s on 2 cores (measured). ``--full`` adds HCM-1 at 0.1 and 0.07 mm (a/10,
 where issue 19's peak-pressure target is set; up to 191k DOF), P2 at 0.17 and 0.12 mm, 2 and 10 increments at
-0.15 mm, nu = 0.49 at 0.25 and 0.1 mm, the fingertip at 0.3 mm and the reference on a/21 cells: several times as
-long (the same cases on the former, shallower mesh took 3.5x the default's CPU time).
+0.15 mm, nu = 0.49 at 0.25 and 0.1 mm, the fingertip at 0.3 mm and the reference on a/21 cells: 584 s (measured,
+peak memory 6.4 GB).
 ``--quick``: two P1 sizes, no fingertip.
 """
 
@@ -42,7 +42,7 @@ NEARLY_INCOMPRESSIBLE_STUDY = "element size (P1 nodal-average, nu = 0.49)"
 
 
 # element sizes [mm] per setting; bisection refines by levels: these give distinct top-surface spacings (0.3 and
-# 0.25 would not). Default: a/5 and the sizes around it, 136 s on 2 cores; --full adds the fine meshes (0.1 and
+# 0.25 would not). Default: a/5 and the sizes around it, 94 s on 2 cores; --full adds the fine meshes (0.1 and
 # 0.07 mm, up to 191k DOF) and the long P2 and 3x3 cases.
 SIZES = {"quick": (0.35, 0.25), "default": (0.35, 0.25, 0.2, 0.14), "full": (0.35, 0.25, 0.2, 0.14, 0.1, 0.07)}
 QUADRATIC_SIZES = {"quick": (0.35,), "default": (0.35,), "full": (0.35, 0.17, 0.12)}   # P2 tets are twice these

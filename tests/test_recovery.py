@@ -74,9 +74,7 @@ def test_leave_one_out_fit_does_not_see_the_left_out_point():
     values = 0.5 + source[:, 0] ** 2 - 0.3 * source[:, 0] * source[:, 1]
     corrupted = values.copy()
     corrupted[0] += 10.0
-    owner = np.arange(120)
-    left_out = moving_least_squares(source, corrupted, source[:1], patch_points=40, source_owner=owner,
-                                    target_owner=owner[:1])
+    left_out = moving_least_squares(source, corrupted, source[:1], patch_points=40, leave_out=np.array([0]))
     assert left_out[0] == pytest.approx(values[0], abs=1e-10)
     assert moving_least_squares(source, corrupted, source[:1], patch_points=40)[0] > values[0] + 0.1
 
@@ -107,11 +105,17 @@ def test_recovery_converges_on_sampled_cattaneo_mindlin(stick_ratio):
     assert errors[1] < errors[0]
 
 
-def test_half_with_mirror_equals_the_whole():
+@pytest.mark.parametrize("noise", [0.0, 0.05])
+def test_half_with_mirror_equals_the_whole(noise):
     # the whole plane is the half (y >= 0) and its mirror image, so every fit of the half with mirrored sources is
-    # the whole plane's fit (even fields); only ties among equidistant grid points at the edge of a 40-point patch
-    # are broken in another order (measured 3e-5 relative): 1e-4
+    # the whole plane's fit (even fields), and the leave-one-out scores that choose the stick patch are the whole's
+    # too (noise: 5 % scatter of the forces, even in y, so that the scores differ and the choice matters). Only ties
+    # among equidistant grid points at the edge of a patch are broken in another order: measured 3e-5 relative on
+    # the smooth field (1e-4), up to 7e-4 with the noise over five seeds, where the tied points differ (2e-3)
+    rel = 1e-4 if noise == 0.0 else 2e-3
     xy, triangles, areas, normal, tangential, status = sampled_cattaneo_mindlin(1 / 8, 0.6, (0.013, 0.0), False)
+    scatter = 1.0 + noise * np.random.default_rng(3).standard_normal(len(xy))
+    normal, tangential = normal * scatter, tangential * scatter[:, None]
     lower = np.flatnonzero(xy[:, 1] > 0)                       # points mirrored to y < 0
     image = np.arange(len(xy))
     image[lower] = len(xy) + np.arange(lower.size)
@@ -122,9 +126,9 @@ def test_half_with_mirror_equals_the_whole():
                             np.concatenate([np.where(xy[:, 1:] > 0, tangential, 2 * tangential), tangential[lower]]),
                             np.concatenate([status, status[lower]]), 0.5)
     half = recover_contact(xy, triangles, areas, normal, tangential, status, 0.5, mirror_y=True)
-    assert half.contact_area == pytest.approx(whole.contact_area, rel=1e-4)
-    assert half.stick_ratio == pytest.approx(whole.stick_ratio, rel=1e-4)
-    assert half.peak_pressure == pytest.approx(whole.peak_pressure, rel=1e-4)
+    assert half.contact_area == pytest.approx(whole.contact_area, rel=rel)
+    assert half.stick_ratio == pytest.approx(whole.stick_ratio, rel=rel)
+    assert half.peak_pressure == pytest.approx(whole.peak_pressure, rel=rel)
 
 
 def test_no_stick_point_gives_zero_stick_ratio():
@@ -141,8 +145,9 @@ def test_mismatched_lengths_are_refused():
 
 def test_recovered_stick_zone_stops_at_points_the_solve_found_slipping():
     # A solve on a coarse mesh can find a stick zone smaller than the field's own: here the Cattaneo-Mindlin field
-    # of c/a = 0.6 with every point beyond r = 0.35 slipping. The quadratic fit over the stick points is exact and
-    # reaches c = 0.6, past the slipping points; the recovered zone must stay within the stick points' triangles.
+    # of c/a = 0.6 with every point beyond r = 0.35 slipping. The quadratic fit over the stick points is exact, so it
+    # stays positive on the ring of slipping points around them (the field's edge is at 0.6); the recovered zone must
+    # stay within the stick points' triangles (without the cap it covers 0.547 of their 0.531 mm^2).
     xy, triangles, areas, normal, tangential, status = sampled_cattaneo_mindlin(1 / 8, 0.6)
     slipping = (status == STICK) & (np.hypot(xy[:, 0], xy[:, 1]) > 0.35)
     status = np.where(slipping, SLIP, status)
@@ -151,4 +156,3 @@ def test_recovered_stick_zone_stops_at_points_the_solve_found_slipping():
     touching = np.any(status[triangles] == STICK, axis=1)
     reachable = positive_area(xy[triangles[touching]], np.ones((touching.sum(), 3))).sum()
     assert recovered.stick_area <= reachable * (1 + EXACT)
-    assert recovered.stick_ratio < 0.6 - 1 / 16                 # the uncapped fit would put the edge at 0.6
