@@ -230,7 +230,11 @@ def _plot(rows: list[dict], hcm1_knee: dict | None, array_knee: dict | None = No
     from studies._convergence_array import plot_array
 
     with_array = any(r["study"] in ARRAY_STUDIES for r in rows)
-    fig, grid = plt.subplots(2 if with_array else 1, 3, figsize=(15, 9.2 if with_array else 4.6), squeeze=False)
+    # a fourth, narrow column holds the legends, which inside the panels hid the knee and the finest points
+    fig, grid = plt.subplots(2 if with_array else 1, 4, figsize=(19, 9.2 if with_array else 4.6), squeeze=False,
+                             gridspec_kw={"width_ratios": (1, 1, 1, 0.8)})
+    for legend_axis in grid[:, 3]:
+        legend_axis.axis("off")
     axes = grid[0]
     panels = ((("coupled_stick_ratio_error", "nodal"), ("recovered_stick_ratio_error", "recovered"),
                ("stick_ratio_error", "nodal vs Cattaneo-Mindlin")),
@@ -239,7 +243,7 @@ def _plot(rows: list[dict], hcm1_knee: dict | None, array_knee: dict | None = No
     labels = ("max |c/a error| (coupled reference)", "|a / a_Hertz - 1|", "|p_max / p0_Hertz - 1|")
     styles = {SIZE_STUDY: "o", NEARLY_INCOMPRESSIBLE_STUDY: "D", "element order (P2)": "s", "shear increments": "^"}
     lines = {"nodal": "--", "recovered": "-", "nodal vs Cattaneo-Mindlin": ":"}
-    for axis, panel, label in zip(axes, panels, labels):
+    for axis, panel, label in zip(axes[:3], panels, labels):
         for study, marker in styles.items():
             subset = [r for r in rows if r["study"] == study]
             for key, kind in panel:
@@ -256,7 +260,7 @@ def _plot(rows: list[dict], hcm1_knee: dict | None, array_knee: dict | None = No
     if hcm1_knee:
         axes[0].plot(hcm1_knee["cpu_time"], hcm1_knee["recovered_stick_ratio_error"], "r*", ms=16,
                      label="knee: cheapest P1 mesh meeting the c/a and p_max targets")
-    axes[0].legend(fontsize=6)
+    grid[0][3].legend(*axes[0].get_legend_handles_labels(), loc="center left", fontsize=7.5, frameon=False)
     axes[0].set_title("HCM-1 (sphere R = 10 mm on a 40x40x20 mm block, nu = 0.45, mu = 0.5)", fontsize=9)
     if with_array:
         plot_array(grid[1][:2], rows, array_knee, KNEE_FACTOR)
@@ -268,7 +272,8 @@ def _plot(rows: list[dict], hcm1_knee: dict | None, array_knee: dict | None = No
         cost.set_xlabel("degrees of freedom")
         cost.set_ylabel("wall time [s]")
         cost.grid(True, which="both", alpha=0.3)
-        cost.legend(fontsize=7)
+        grid[1][3].legend(*cost.get_legend_handles_labels(), loc="center left", fontsize=7.5, frameon=False,
+                          title="wall time against DOF")
     for axis in fig.axes:                      # log axes spanning under a decade would label every minor tick
         axis.xaxis.set_minor_formatter(NullFormatter())
     fig.suptitle("Error against run time: nodal and recovered stick ratio, contact radius, peak pressure")
