@@ -151,12 +151,12 @@ def mesh_quality(nodes: np.ndarray, tets: np.ndarray) -> MeshQuality:
 
 
 
-# tets per h^3 of volume (h the target edge length), measured with size_cells(): graded bisection 24-34 under a
+# tets per h^3 of volume (h the target edge length), measured with size_cells(): graded bisection 24-35 under a
 # sphere (HCM-1's block at h = 0.35 ... 0.1 mm with the fine zone a/2 deep, the stability study's block, P1 and P2)
-# and 66-94 under a plane pressing a whole block top (a fine zone 0.2 mm deep and as wide as the block: bisection
-# cannot grade as fast as the target below it), gmsh 0.65-0.75 x 6 on the Fig. 4 cap and the 3x3 array. The bisection
-# value is the old upper end: 1.3-2x too many tets under a sphere, 0.55-0.75 of them under a plane (the memory model
-# in contact.limits carries a margin of 1.5 for that)
+# and 47-66 under a plane pressing a whole block top (h = 0.5 and 0.35 mm; a fine zone 0.2 mm deep and as wide as the
+# block: bisection cannot grade as fast as the target below it), gmsh 0.65-0.75 x 6 on the Fig. 4 cap and the 3x3
+# array. The bisection value is the old upper end: 1.4-2.1x too many tets under a sphere, 0.76-1.07 of them under a
+# plane (the memory model in contact.limits carries a margin of 1.5 for that)
 BISECTION_TETS_PER_CELL = 50.0
 GMSH_TETS_PER_CELL = 4.5
 NODES_PER_TET = 0.2          # 3.9-5.4 tets per node on the same meshes
