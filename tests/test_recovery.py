@@ -147,7 +147,7 @@ def test_recovered_stick_zone_stops_at_points_the_solve_found_slipping():
     # A solve on a coarse mesh can find a stick zone smaller than the field's own: here the Cattaneo-Mindlin field
     # of c/a = 0.6 with every point beyond r = 0.35 slipping. The quadratic fit over the stick points is exact, so it
     # stays positive on the ring of slipping points around them (the field's edge is at 0.6); the recovered zone must
-    # stay within the stick points' triangles (without the cap it covers 0.547 of their 0.531 mm^2).
+    # stay within the stick points' triangles (without the cap it covers 0.547 mm^2 against their 0.531 mm^2).
     xy, triangles, areas, normal, tangential, status = sampled_cattaneo_mindlin(1 / 8, 0.6)
     slipping = (status == STICK) & (np.hypot(xy[:, 0], xy[:, 1]) > 0.35)
     status = np.where(slipping, SLIP, status)
