@@ -85,8 +85,8 @@ def readings_operator(result, array):
     build it once per result and array, pass it to every frame and noise draw (its build costs ~20 frames)."""
     from controller.sensor import cell_force_operator
 
-    field = base_pressure_field(result)
-    return cell_force_operator(field.positions, field.triangles, array)
+    base = result.model.base                       # the mesh alone: no need to stack every increment's pressure
+    return cell_force_operator(base.positions[:, :2], base.triangles, array)
 
 
 def sensor_readings(result, array, rng=None, operator=None) -> np.ndarray:

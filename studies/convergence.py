@@ -165,7 +165,8 @@ def add_arguments(parser) -> None:
     """Options of ``python -m studies convergence``."""
     parser.add_argument("--full", action="store_true",
                         help="add the fine meshes (HCM-1 h = 0.1 and 0.07 mm, P2 0.17 and 0.12 mm, 3x3 fingertip "
-                             "0.3 mm) and 2 and 10 shear increments: several times the default's ~2 minutes")
+                             "0.3 mm) and 2 and 10 shear increments: about 10 minutes (584 s measured) against the "
+                             "default's 1.5")
 
 
 def run(out_dir, quick: bool = False, full: bool = False) -> dict:
