@@ -176,11 +176,29 @@ def test_fast_loop_reproduces_the_recorded_explicit_loop(case):
     _check_against_reference(record, run_trial(TABLE_I_OBJECTS[record["object"]], _settings(record)))
 
 
+DIVERGED_FORCE = 5.0          # x the command: a stable contact stays near it (implicit: within 1 %)
+
+
+def _explicit_diverges(box, settings) -> bool:
+    """Whether a trial blows up: the world stops it because MuJoCo reset the simulation (its bad-acceleration
+    warning, which MuJoCo 3 gave here), or the finger force runs past DIVERGED_FORCE times the command (MuJoCo 4
+    integrates on: 19x at 2 ms)."""
+    from controller.closed_loop import run_trial
+
+    try:
+        trial = run_trial(box, settings)
+    except RuntimeError as error:
+        if "reset the simulation" not in str(error):
+            raise
+        return True
+    return trial.max_force > DIVERGED_FORCE * settings.constant_force
+
+
 def test_implicit_coupling_holds_a_light_object_still_where_the_explicit_one_fails():
     """A 104 g box squeezed at 12 N per finger: the contact's damping alone gives c h / m ~ 2 at 1 ms, where
     explicit damping diverges. Coupled implicitly the box sits still at 2 ms and 1 ms steps and the finger force is
     the command; coupled explicitly it rattles between the fingers at 1 ms (the force peaks at over 1.5 times the
-    command) and MuJoCo gives up at the default 2 ms."""
+    command) and diverges at the default 2 ms, whatever the MuJoCo version does about it."""
     from controller.closed_loop import run_trial
 
     box = GraspObject("light_box", 0.104, (0.14, 0.03, 0.03), 0.0382, 0.015)
@@ -190,9 +208,8 @@ def test_implicit_coupling_holds_a_light_object_still_where_the_explicit_one_fai
         assert implicit.success and implicit.hold_rotation_mrad < 0.1 and implicit.hold_slip_mm < 1e-3
         assert implicit.max_force == pytest.approx(12.0, rel=0.01)
     explicit = run_trial(box, replace(settings, physics_rate_hz=1000.0, implicit_coupling=False))
-    assert explicit.max_force > 1.5 * 12.0
-    with pytest.raises(RuntimeError, match="bad accelerations"):
-        run_trial(box, replace(settings, physics_rate_hz=500.0, implicit_coupling=False))
+    assert 1.5 * 12.0 < explicit.max_force < DIVERGED_FORCE * 12.0              # rattles, does not diverge
+    assert _explicit_diverges(box, replace(settings, physics_rate_hz=500.0, implicit_coupling=False))
 
 
 @pytest.mark.parametrize("changes, match", [
