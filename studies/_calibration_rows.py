@@ -5,8 +5,8 @@ import from here and not from each other.
 
 The per-bump CoP shift is measured alike on both sides, from the pressed state of the path, in two ways:
 ``cells`` - the centre of the sensor-plane pressure in each bump's Voronoi cell (FEM base nodes, model grid nodes);
-``sensor`` - what the controller sees: the field sampled by ``controller.sensor.sample`` on the paper's 11 x 13
-array at 3 mm pitch and reduced by ``controller.estimator.bump_positions`` (no noise, no noise gate).
+``sensor`` - what the controller sees: the field sampled by ``controller.sensing.sensor.sample`` on the paper's 11 x 13
+array at 3 mm pitch and reduced by ``controller.estimation.estimator.bump_positions`` (no noise, no noise gate).
 Its error is the model minus the FEM per bump and axis, relative to the increment's largest FEM shift (a bump near
 the twist centre or an axis across the load barely moves; the largest shift is the signal's scale).
 """
@@ -96,8 +96,8 @@ class SensorView:
     """The paper's sensor array and the estimator's bump positions, applied to FEM results and reduced models."""
 
     def __init__(self, design):
-        from controller.estimator import BumpLayout
-        from controller.sensor import SensorArray
+        from controller.estimation.estimator import BumpLayout
+        from controller.sensing.sensor import SensorArray
 
         self.array = SensorArray()                                           # 11 x 13 nodes at 3 mm
         self.layout = BumpLayout.grid((design.cols, design.rows), design.pitch)
@@ -105,19 +105,19 @@ class SensorView:
 
     def cop(self, readings) -> np.ndarray:
         """Per-bump CoP (t, k, 2) [mm] of readings (t, ny, nx) [N] (``bump_positions``, no noise gate)."""
-        from controller.estimator import bump_positions
+        from controller.estimation.estimator import bump_positions
 
         return bump_positions(readings, self.array, self.layout)[1]
 
     def fem_cop(self, result) -> np.ndarray:
         """Sensor CoP (t, k, 2) [mm] of every increment of an FEM result."""
-        from controller.bench import sensor_readings
+        from controller.estimation.bench import sensor_readings
 
         return self.cop(sensor_readings(result, self.array))
 
     def model_cop(self, tip, bump_force, displacement, tangential_force) -> np.ndarray:
         """Sensor CoP (t, k, 2) [mm] of the reduced model's base pressure for per-increment bump loads (t, k[, 2])."""
-        from controller.sensor import PressureField, cell_force_operator, sample
+        from controller.sensing.sensor import PressureField, cell_force_operator, sample
 
         grid = tip.base_grid(SENSOR_GRID_SPACING)
         radius = tip.parameters.radius_coefficient * np.cbrt(np.maximum(bump_force, 0.0))

@@ -37,7 +37,7 @@ def run(out_dir, quick: bool = False) -> dict:
 
     from contact.solver import solve_scene
     from contact.theory import flat_curved, stick_ratio_profile
-    from controller.bench import plate_shear_scene
+    from controller.estimation.bench import plate_shear_scene
 
     out_dir = Path(out_dir)
     size = 0.4 if quick else 0.2                          # mm: a/5 quick, a/10 default

@@ -34,7 +34,7 @@ def run(out_dir, quick: bool = False) -> dict:
     """Shear both gels by force control up to Q/(mu P) = 0.99; write fig4.csv, .png, .pdf."""
     from contact.solver import solve_scene
     from contact.theory import stick_ratio_translational
-    from controller.bench import plate_shear_scene
+    from controller.estimation.bench import plate_shear_scene
 
     out_dir = Path(out_dir)
     ratios = (0.3, 0.5, 0.7, 0.95) if quick else (0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95, 0.98, 0.99)

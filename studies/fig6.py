@@ -5,8 +5,8 @@ FEM of the 40 x 40 mm fingertip with 1x1, 2x2, 3x3 and 4x4 hemisphere arrays und
 
 - ``cells``: every node integrates the pressure over its whole pitch x pitch cell, noise-free (the ideal array);
 - ``small pads``: pads of a third of the pitch (fill 1/9), noise-free (the synthetic check of the issue);
-- ``capacitive``: the capacitive node of ``controller.capacitive`` - 0.5 mm gaps between pads (fill 0.25 at 1 mm,
-  0.69 at 3 mm), saturating pressure-capacitance curve, 2 % crosstalk, 0.5 fF noise, 16-bit converter - each state
+- ``capacitive``: the capacitive node of ``controller.sensing.capacitive`` - 0.5 mm gaps between pads (fill 0.25 at
+  1 mm, 0.69 at 3 mm), saturating pressure-capacitance curve, 2 % crosstalk, 0.5 fF noise, 16-bit converter - each state
   held 0.1 s (10 frames at 100 Hz, averaged), over NOISE_DRAWS noise draws (mean error; its spread in the CSV).
 
 The estimator (per-bump centre of pressure, the mean over the bumps) gives the shear displacement, compared with the
@@ -36,9 +36,9 @@ FRAMES_PER_STATE = 10                  # frames averaged per quasi-static state:
 
 def sensor_model(sensor: str, pitch: float):
     """The SensorArray of a sensor model at ``pitch`` [mm] covering the 40 mm footprint."""
-    from controller.bench import sensor_array
-    from controller.capacitive import CapacitiveNode
-    from controller.sensor import capacitive_array
+    from controller.estimation.bench import sensor_array
+    from controller.sensing.capacitive import CapacitiveNode
+    from controller.sensing.sensor import capacitive_array
 
     cells = sensor_array(pitch)
     if sensor == "cells":
@@ -50,8 +50,8 @@ def sensor_model(sensor: str, pitch: float):
 
 def cop_shifts(result, array, layout, seed: int | None, operator=None):
     """Per-bump CoP shifts (t, k, 2) [mm], readings averaged over FRAMES_PER_STATE frames per state (noisy sensor);
-    ``operator``: ``controller.bench.readings_operator`` of the result and array, built once for every seed."""
-    from controller.bench import averaged_cop_shifts
+    ``operator``: ``controller.estimation.bench.readings_operator`` of the result and array, built once per seed set."""
+    from controller.estimation.bench import averaged_cop_shifts
 
     return averaged_cop_shifts(result, array, layout, seed, FRAMES_PER_STATE, operator)[0]
 
@@ -59,7 +59,7 @@ def cop_shifts(result, array, layout, seed: int | None, operator=None):
 def evaluate(cop_shift: np.ndarray, shifts, design_gain: float | None = None) -> dict:
     """Errors of the estimated shift with ``design_gain`` (before; None: this sensor's own fit, as for the reference
     sensor itself) and after calibrating the gain on CALIBRATION_SHIFTS [%]."""
-    from controller.calibration import calibrate_gain
+    from controller.estimation.calibration import calibrate_gain
 
     shifts = np.asarray(shifts, dtype=float)
     truth = np.zeros_like(cop_shift)
@@ -80,7 +80,8 @@ def run(out_dir, quick: bool = False) -> dict:
     from tqdm import tqdm
 
     from contact.solver import solve_scene
-    from controller.bench import BENCH_SIZE_BASE, BENCH_SIZE_CONTACT, bench_scene, bump_layout, readings_operator
+    from controller.estimation.bench import (BENCH_SIZE_BASE, BENCH_SIZE_CONTACT, bench_scene, bump_layout,
+                                             readings_operator)
 
     out_dir = Path(out_dir)
     arrays = (1, 3) if quick else (1, 2, 3, 4)

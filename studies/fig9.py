@@ -23,10 +23,10 @@ SENSOR_PITCH = 3.0
 def run(out_dir, quick: bool = False) -> dict:
     """Two FEM runs (shift, twist); estimates, regression and errors; CSV, PNG, PDF."""
     from contact.solver import solve_scene
-    from controller.calibration import calibrate_gain
-    from controller.estimator import estimate_slip
-    from controller.bench import (BENCH_SIZE_BASE, BENCH_SIZE_CONTACT, bench_scene, bump_layout, sensor_array,
-                                    shifts_of)
+    from controller.estimation.calibration import calibrate_gain
+    from controller.estimation.estimator import estimate_slip
+    from controller.estimation.bench import (BENCH_SIZE_BASE, BENCH_SIZE_CONTACT, bench_scene, bump_layout,
+                                             sensor_array, shifts_of)
 
     out_dir = Path(out_dir)
     shifts = (0.05, 0.1, 0.2) if quick else (0.04, 0.08, 0.12, 0.16, 0.2)       # >= 3 points: R^2 means something

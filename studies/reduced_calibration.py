@@ -71,7 +71,7 @@ class StudyPlan:
 
     @classmethod
     def default(cls, quick: bool = False) -> "StudyPlan":
-        from controller.bench import BENCH_SIZE_BASE, BENCH_SIZE_CONTACT
+        from controller.estimation.bench import BENCH_SIZE_BASE, BENCH_SIZE_CONTACT
 
         calibration = (
             LoadCase("press", press_forces=(1.0, 2.0, 4.0, 6.0)),
@@ -107,7 +107,7 @@ def add_arguments(parser) -> None:
 
 def _scene(plan: StudyPlan, name: str, loads, fine_radius: float | None):
     from contact.scene import BodySpec, ContactSpec, Material, MeshSettings, Scene
-    from controller.bench import FRICTION, POISSONS_RATIO, YOUNGS_MODULUS, fingertip_gel
+    from controller.estimation.bench import FRICTION, POISSONS_RATIO, YOUNGS_MODULUS, fingertip_gel
 
     return Scene(name=name, gel=fingertip_gel(3), material=Material(YOUNGS_MODULUS, POISSONS_RATIO),
                  body=BodySpec("plane"), contact=ContactSpec(friction_coefficient=FRICTION),
@@ -280,7 +280,7 @@ def time_base_pressure(tip, sensor: SensorView, repeats: int = 7, calls: int = 2
     Both are timed in the same loop (a 5 N state with shear and twist): the ratio is what to compare between
     machines; the closed loop calls both at 100 Hz per fingertip.
     """
-    from controller.sensor import PressureField, cell_force_operator, sample
+    from controller.sensing.sensor import PressureField, cell_force_operator, sample
 
     grid = tip.base_grid(SENSOR_GRID_SPACING)
     state = tip.load_state(5.0, (1.0, 0.5), 10.0, 1.0)

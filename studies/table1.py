@@ -1,8 +1,8 @@
 """Table I (closed loop, MuJoCo): grasp success rate and grasp force for the bottle (upright, horizontal) and eclair.
 
 Each trial runs the paper's sequence - grasp on the table, lift 50 mm, hold 4 s, place, release - with the
-incipient-slip controller (controller.incipient_slip) on the reduced 3x3-array fingertip, randomised friction mu in
-[0.4, 1.0], grasp position (+-5 mm along the object, +-1 mm in height), object misalignment (+-1 deg) and sensor
+incipient-slip controller (controller.control.incipient_slip) on the reduced 3x3-array fingertip, randomised friction mu
+in [0.4, 1.0], grasp position (+-5 mm along the object, +-1 mm in height), object misalignment (+-1 deg) and sensor
 noise (0.5-2 mN per node). The controller knows neither mass, moment nor mu. Outcomes are told apart: dropped (the
 object touched the table in the hold: under-grip), crushed (a finger's force exceeded the object's crush force:
 over-grip; the eclair's is 10 N), turned out of the grasp (more than 0.15 rad); success is neither dropped nor

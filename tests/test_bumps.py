@@ -84,7 +84,7 @@ def test_a_bump_at_gross_slip_has_no_margin_and_an_unloaded_one_all_of_it():
 
 def array_scene():
     """The 3x3 fingertip of the quick Fig. 6 / 9 bench (h = 0.7 mm, its mesh cached) under press, shear and twist."""
-    from controller.bench import fingertip_gel
+    from controller.estimation.bench import fingertip_gel
 
     return Scene(name="array", gel=fingertip_gel(3), material=Material(0.3, 0.45), body=BodySpec("plane"),
                  contact=ContactSpec(friction_coefficient=1.0),

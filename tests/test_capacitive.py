@@ -5,8 +5,8 @@ import dataclasses
 import numpy as np
 import pytest
 
-from controller.capacitive import CapacitiveNode
-from controller.sensor import PressureField, SensorArray, capacitive_array, sample
+from controller.sensing.capacitive import CapacitiveNode
+from controller.sensing.sensor import PressureField, SensorArray, capacitive_array, sample
 
 EPS = np.finfo(float).eps
 NODE = CapacitiveNode()

@@ -1,5 +1,5 @@
-"""The compiled frame loop of the closed loop (controller.closed_loop._fused, controller._slip_frame) against the
-Python loop and the reference IncipientSlipController it replaces, on recorded trials."""
+"""The compiled frame loop of the closed loop (controller.closed_loop._fused, controller.control._slip_frame) against
+the Python loop and the reference IncipientSlipController it replaces, on recorded trials."""
 
 from dataclasses import replace
 
@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from controller import GraspPhase
-from controller._slip_frame import SlipControllerState
+from controller.control._slip_frame import SlipControllerState
 from controller.closed_loop import TABLE_I_OBJECTS, GraspWorld, TrialSettings
-from controller.incipient_slip import IncipientSlipController, IncipientSlipParameters
+from controller.control.incipient_slip import IncipientSlipController, IncipientSlipParameters
 
 # the same arithmetic compiled and interpreted (numba does not reorder floating point without fastmath): the two
 # agree to round-off; 1e-9 leaves room for a summation order and still catches any difference of the law

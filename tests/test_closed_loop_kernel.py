@@ -10,20 +10,12 @@ import numpy as np
 import pytest
 
 from controller import AccelerationController, AccelerationControlParameters
-from controller.closed_loop import (
-    ROTATION_LIMIT,
-    TABLE_I_OBJECTS,
-    ControllerKind,
-    GraspObject,
-    SensingChain,
-    TargetDesign,
-    TrialSettings,
-    default_tip,
-)
+from controller.closed_loop import (ROTATION_LIMIT, TABLE_I_OBJECTS, ControllerKind, GraspObject, SensingChain,
+                                    TargetDesign, TrialSettings, default_tip)
 from controller.closed_loop import _kernel as K
-from controller.estimator import BumpReference, bump_positions, estimate_slip
-from controller.filters import FirstOrderLowPass
-from controller.sensor import PressureField, sample
+from controller.estimation.estimator import BumpReference, bump_positions, estimate_slip
+from controller.control.filters import FirstOrderLowPass
+from controller.sensing.sensor import PressureField, sample
 
 REFERENCE = json.loads((Path(__file__).parent / "data" / "closed_loop_reference.json").read_text())
 ROUND_OFF = 1e-12                        # relative: the compiled code sums in another order

@@ -1,9 +1,9 @@
 """Grasp Force Control block against the closed-form Hertz-Mindlin-Lubkin fingertip, in the full multi-rate loop.
 
-The controller gets u_x [mm] and the twist angle theta [rad] from the fixture plant (controller.hertz_plant), never
-mu, the loads or the object's mass. Its targets are designed for the lowest friction expected, mu_low = 0.5:
+The controller gets u_x [mm] and the twist angle theta [rad] from the fixture plant (controller.plant.hertz_plant),
+never mu, the loads or the object's mass. Its targets are designed for the lowest friction expected, mu_low = 0.5:
 Q/(mu_low P) = 0.85 and T/(mu_low P a) = 0.5 (85 % of gross slip in each mode) at 1 N, scaled with the force
-(controller.references). At the true mu the same targets hold the contact at the load ratios predicted below.
+(controller.control.references). At the true mu the same targets hold the contact at the load ratios predicted below.
 """
 
 import math
@@ -15,8 +15,8 @@ import pytest
 from controller import (AccelerationControlParameters, AccelerationController, ActuatorParameters, ActuatorPlant,
                         GraspForceController, GraspForceParameters, GraspPhase, MultiRateRunner, ReferenceGenerator,
                         ReferenceParameters)
-from controller.hertz_plant import (SLIP_TORQUE_RATIO, ClosedFormContactPlant, HertzFingertip, normalized_lubkin_torque,
-                                    normalized_lubkin_twist, slip_factors)
+from controller.plant.hertz_plant import (SLIP_TORQUE_RATIO, ClosedFormContactPlant, HertzFingertip,
+                                          normalized_lubkin_torque, normalized_lubkin_twist, slip_factors)
 
 DESIGN_FRICTION, DESIGN_LOAD_RATIO, DESIGN_TORQUE_RATIO = 0.5, 0.85, 0.5
 TIP = HertzFingertip()

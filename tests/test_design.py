@@ -6,9 +6,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from controller.design import (DesignStudy, FingertipDesign, design_sweep, design_table, increment_table,
-                               pareto_front)
-from controller._design_file import design_spec_from_dict
+from controller.design import DesignStudy, FingertipDesign, design_sweep, design_table, increment_table, pareto_front
+from controller.design._file import design_spec_from_dict
 
 # the quick bench meshes (h = 0.7 mm at the bump tops, 1.5 mm on the sensor plane), two noise draws
 QUICK = DesignStudy(size_contact=0.7, size_base=1.5, noise_draws=2)

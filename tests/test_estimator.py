@@ -4,11 +4,11 @@ import numpy as np
 import pytest
 
 from contact.theory import stick_ratio_from_rotation, stick_ratio_from_shear_displacement
-from controller.calibration import EstimatorCalibration, PositionSource
-from controller.estimator import (BumpLayout, BumpReference, EstimatorSettings, bump_positions, estimate_slip,
-                                  rotational_stick_ratio, translational_stick_ratio)
-from controller.rigid_transform import FrameStatus
-from controller.sensor import PressureField, SensorArray, sample
+from controller.estimation.calibration import EstimatorCalibration, PositionSource
+from controller.estimation.estimator import (BumpLayout, BumpReference, EstimatorSettings, bump_positions,
+                                             estimate_slip, rotational_stick_ratio, translational_stick_ratio)
+from controller.estimation.rigid_transform import FrameStatus
+from controller.sensing.sensor import PressureField, SensorArray, sample
 
 PAPER_ARRAY = SensorArray()                                   # 11 x 13 nodes at 3 mm
 LAYOUT = BumpLayout.grid(spacing=12.0)                         # 3 x 3 bumps, regions = Voronoi cells

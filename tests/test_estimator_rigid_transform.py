@@ -5,9 +5,9 @@ import json
 import numpy as np
 import pytest
 
-from controller.calibration import EstimatorCalibration, PositionSource, calibrate_gain
-from controller.estimator import BumpLayout
-from controller.rigid_transform import FrameStatus, fit_rigid_transform
+from controller.estimation.calibration import EstimatorCalibration, PositionSource, calibrate_gain
+from controller.estimation.estimator import BumpLayout
+from controller.estimation.rigid_transform import FrameStatus, fit_rigid_transform
 
 REFERENCE = BumpLayout.grid(spacing=12.0).centre_array        # 3 x 3 bumps, centroid at the origin [mm]
 

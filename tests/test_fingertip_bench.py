@@ -7,7 +7,7 @@ import pytest
 
 def test_sensor_conserves_the_fem_base_force():
     from contact.solver import solve_scene
-    from controller.bench import bench_scene, sensor_array, sensor_readings
+    from controller.estimation.bench import bench_scene, sensor_array, sensor_readings
 
     result = solve_scene(bench_scene(1, "shift", (0.1,), 0.8, 2.0))
     readings = sensor_readings(result, sensor_array(1.0))
@@ -50,7 +50,7 @@ def test_fig9_quick_recovers_translation_and_rotation(tmp_path):
     fits = summary["fits"]
     import json
 
-    from controller.calibration import EstimatorCalibration
+    from controller.estimation.calibration import EstimatorCalibration
 
     stored = json.loads((tmp_path / "fingertip_3x3_calibration.json").read_text())
     assert stored["design"]["gel"]["rows"] == 3

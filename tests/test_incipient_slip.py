@@ -1,5 +1,5 @@
-"""Incipient-slip controller (controller.incipient_slip) on a quasi-static plant: the reduced array model's own load
-state at the commanded grip, read without sensor error. The controller sees bump forces and load ratios only."""
+"""Incipient-slip controller (controller.control.incipient_slip) on a quasi-static plant: the reduced array model's own
+load state at the commanded grip, read without sensor error. The controller sees bump forces and load ratios only."""
 
 import ast
 import inspect
@@ -10,7 +10,7 @@ import pytest
 
 from contact.reduced import ReducedFingertip
 from controller import GraspPhase
-from controller.incipient_slip import IncipientSlipController, IncipientSlipParameters, array_margin
+from controller.control.incipient_slip import IncipientSlipController, IncipientSlipParameters, array_margin
 
 TIP = ReducedFingertip.calibrated()
 FRAME_STEPS = 10                                     # control steps per sensor frame (1 kHz / 100 Hz)
@@ -117,7 +117,7 @@ def test_a_sliding_bump_is_seen_and_a_stuck_one_is_not(noise):
     friction limit keeps |rho| = mu = 0.7; a stuck bump's load is fixed, so its ratio rises like P^-1 (at least
     P^-2/3, the bound the test sits just under). With the sensor's noise margin (3 sigma ~ 0.03 at 1-2 mN per node)
     the sliding bump must still be told apart."""
-    from controller._slip_kernels import slip_signature
+    from controller.control._slip_kernels import slip_signature
 
     parameters = IncipientSlipParameters()
     centres = len(TIP.centres)

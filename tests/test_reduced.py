@@ -14,7 +14,7 @@ import pytest
 from contact.reduced import (ArrayFingertipDesign, BaseGrid, ReducedFingertip, ReducedParameters, SlipMode,
                              bump_response, normal_split)
 from contact.theory import effective_modulus, hertz, lubkin_twist, mindlin_shift, shear_modulus
-from controller.sensor import PressureField
+from controller.sensing.sensor import PressureField
 
 DESIGN = ArrayFingertipDesign()
 TIP = ReducedFingertip(DESIGN)

@@ -304,9 +304,9 @@ def test_packaged_calibration_matches_a_held_out_fem_press(coarse_held_out):
 def test_packaged_calibration_follows_the_fem_cop_of_a_held_out_shear_and_twist(coarse_held_out):
     # per-bump CoP shift from the 5 N press, both axes, relative to the increment's largest FEM shift: in the bumps'
     # cells of the sensor plane and through the paper's sensor (11 x 13 nodes at 3 mm) and the estimator
-    from controller.bench import sensor_readings
-    from controller.estimator import BumpLayout, bump_positions
-    from controller.sensor import PressureField, SensorArray, sample
+    from controller.estimation.bench import sensor_readings
+    from controller.estimation.estimator import BumpLayout, bump_positions
+    from controller.sensing.sensor import PressureField, SensorArray, sample
 
     result, fem, model = coarse_held_out
     tip = load_calibrated(design=DESIGN)

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 from scipy.spatial import Delaunay
 
-from controller.sensor import (Interpolation, PressureField, SensorArray, cell_force_operator,
-                               resample_time_series, sample)
+from controller.sensing.sensor import (Interpolation, PressureField, SensorArray, cell_force_operator,
+                                       resample_time_series, sample)
 
 PAPER_ARRAY = SensorArray()                       # 11 x 13 nodes at 3 mm, footprint 33 x 39 mm
 EPS = np.finfo(float).eps

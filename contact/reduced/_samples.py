@@ -2,8 +2,8 @@
 
 The FEM gives fields on points: contact pressure and tangential traction on the candidate points of the gel's top,
 pressure on the nodes of the sensor plane. Each point belongs to the bump whose centre is nearest (the Voronoi cell
-the estimator uses on the sensor, ``controller.estimator.BumpLayout``); summing over a cell gives the bump's normal
-and tangential force, its torque about its own axis, its contact area and, on the sensor plane, its share of the
+the estimator uses on the sensor, ``controller.estimation.estimator.BumpLayout``); summing over a cell gives the bump's
+normal and tangential force, its torque about its own axis, its contact area and, on the sensor plane, its share of the
 base force with its centre of pressure (CoP) and second moment. The reduced model's states give the same arrays
 (``PathSamples.from_reduced``: its base pressure on a grid, cut into the same cells), so that calibration and
 held-out comparison read both sides alike. Everything is vectorised over increments and points.

@@ -1,10 +1,11 @@
-"""Closed-loop grasp in MuJoCo: a parallel-jaw gripper with two 3x3-array gel fingertips on a lifting arm.
+"""Closed loop: the MuJoCo grasp (a parallel-jaw gripper with two 3x3-array gel fingertips on a lifting arm) and the
+multi-rate runner, plant and control joined; may import sensing, estimation, control and plant.
 
 Loop (paper Fig. 7): reduced contact model -> base pressure -> sensor (100 Hz, noise) -> estimator (per-bump forces
 and load ratios, and eq. 9's shear displacement on a 3x3 BumpLayout) -> grasp-force controller (1 kHz; by default
-the incipient-slip law of ``controller.incipient_slip``, ``ControllerKind``) -> Acceleration Control with DOB (8 kHz)
--> finger motor force. The controller gets no object data (mass, moment, friction) and no simulator slip state. Sequence: approach, grasp on the table, lift, hold (4 s),
-place, release. From Python::
+the incipient-slip law of ``controller.control.incipient_slip``, ``ControllerKind``) -> Acceleration Control with DOB (8
+kHz) -> finger motor force. The controller gets no object data (mass, moment, friction) and no simulator slip state.
+Sequence: approach, grasp on the table, lift, hold (4 s), place, release. From Python::
 
     from controller.closed_loop import TABLE_I_OBJECTS, TrialSettings, run_trial
     result = run_trial(TABLE_I_OBJECTS["eclair"], TrialSettings(friction_coefficient=0.5))
@@ -30,8 +31,8 @@ contact to the object implicitly (backward Euler on the contact terms, so the li
 step); a sensor frame's physics steps run in compiled code, MuJoCo's own ``mj_step`` called from it. Outcomes
 match the explicit 8 kHz loop this replaced within the tolerances of tests/test_closed_loop_kernel.py. With the
 incipient-slip controller the whole trial is one compiled call (``_fused``): per frame the sensing, the controller's
-observe and 1 kHz steps (its state in arrays, ``controller._slip_frame``) and the physics steps, the same arithmetic
-as the Python frame loop the displacement-target law keeps (tests/test_closed_loop_fused.py).
+observe and 1 kHz steps (its state in arrays, ``controller.control._slip_frame``) and the physics steps, the same
+arithmetic as the Python frame loop the displacement-target law keeps (tests/test_closed_loop_fused.py).
 The world is SI; the reduced model is mm, N, N mm: ``ContactBridge`` converts at one place (names carry the unit).
 Object-table contact stays MuJoCo's (elliptic cone): it only decides when the object leaves or touches the table.
 """
@@ -40,6 +41,7 @@ Object-table contact stays MuJoCo's (elliptic cone): it only decides when the ob
 from ._batch import default_processes, map_trials, run_trials
 from ._bridge import ContactBridge
 from ._minimum import MinimumForce, holds_at, minimum_grip_force
+from ._multirate import LoopSample, MultiRateRunner, rate_ratio
 from ._sensing import SensingChain, SensorFrame
 from ._trial import (ACTUATOR_RATE_HZ, ARM_RADIUS, DESIGN_FRICTION, GRAVITY, LOOP_RATE, MM_PER_M, PHYSICS_RATE_HZ,
                      ROTATION_LIMIT, TABLE_I_OBJECTS, TORQUE_LIMIT, ControllerKind, GraspObject, TargetDesign,
@@ -50,4 +52,5 @@ __all__ = ["GraspObject", "TABLE_I_OBJECTS", "TargetDesign", "TrialSettings", "T
            "GraspWorld", "SensingChain", "SensorFrame", "ContactBridge", "run_trial", "run_trials", "map_trials",
            "default_processes", "MinimumForce", "holds_at", "minimum_grip_force", "random_settings",
            "required_grip_force", "default_tip", "DESIGN_FRICTION", "GRAVITY", "MM_PER_M", "PHYSICS_RATE_HZ",
-           "ACTUATOR_RATE_HZ", "LOOP_RATE", "ROTATION_LIMIT", "TORQUE_LIMIT", "ARM_RADIUS"]
+           "ACTUATOR_RATE_HZ", "LOOP_RATE", "ROTATION_LIMIT", "TORQUE_LIMIT", "ARM_RADIUS", "LoopSample",
+           "MultiRateRunner", "rate_ratio"]

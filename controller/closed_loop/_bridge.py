@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 
 from contact.reduced import ReducedFingertip
-from controller.acceleration_control import AccelerationControlParameters
-from controller.filters import FirstOrderLowPass
+from controller.control.acceleration_control import AccelerationControlParameters
+from controller.control.filters import FirstOrderLowPass
 
 from . import _kernel as K
 from ._trial import MM_PER_M, GraspObject

@@ -2,8 +2,8 @@
 
 One call of ``run_frames`` advances frames [first, stop) of a trial: per frame (100 Hz) the sensor reads the bump
 states the last physics step left (``_sensing_kernel.sense_frame``, with the frame's pre-drawn node noise), the
-compiled incipient-slip controller observes the per-bump loads (``controller._slip_frame.observe_frame``) and runs
-the frame's control steps (``control_step``), and the frame's physics steps follow (``_kernel.run_block``). The
+compiled incipient-slip controller observes the per-bump loads (``controller.control._slip_frame.observe_frame``) and
+runs the frame's control steps (``control_step``), and the frame's physics steps follow (``_kernel.run_block``). The
 same arithmetic as the Python loop of ``GraspWorld.run`` (which still drives the displacement-target law) in the
 same order; what is left to Python between calls is the check whether the object touches the table in the hold.
 """
@@ -15,7 +15,7 @@ import math
 import numpy as np
 from fem.compiled import njit_cached
 
-from controller._slip_frame import APPROACH, RELEASE, X_FRICTION, X_TIME, control_step, observe_frame
+from controller.control._slip_frame import APPROACH, RELEASE, X_FRICTION, X_TIME, control_step, observe_frame
 
 from . import _kernel as K
 from ._sensing_kernel import load_ratio_noise, sense_frame

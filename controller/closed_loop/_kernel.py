@@ -6,8 +6,8 @@ wrench on the object and the arm in ``xfrc_applied`` for the ``mj_step`` that fo
 1. Gripper, n = actuator rate / physics rate sub-steps of dt = h / n (8 kHz, as the paper's actuator loop): the
    closing s of the two mirrored fingers (m_f s'' = F_motor - c_f s' - P, P the per-finger normal force, damping
    implicit as MuJoCo's Euler integrator treats joint damping), the Acceleration Control block with its disturbance
-   observer (the equations of ``controller.acceleration_control``, checked step for step against that class in the
-   tests), and the normal force of every bump tip against the object face, P_i = k_n d_i^(3/2)
+   observer (the equations of ``controller.control.acceleration_control``, checked step for step against that class in
+   the tests), and the normal force of every bump tip against the object face, P_i = k_n d_i^(3/2)
    (1 + 1.5 tau_d d_i' / d_i), d_i' from the relative velocity (not a finite difference). The object is held at its
    pose and twist at the start of the step.
 2. Tangential contact once per step (``contact.reduced.bump_law``: Mindlin, Lubkin, elliptic combined limit) at the
@@ -61,7 +61,7 @@ S_TWIST, S_APPLIED, S_SIZE = 13, 19, 25                        # previous object
 
 @njit_cached
 def acceleration_step(state, config, force_command, measured_force, angle, period):
-    """Acceleration Control with DOB (``controller.acceleration_control``) on the state vector; torque [N mm]."""
+    """Acceleration Control with DOB (``control.acceleration_control``) on the state vector; torque [N mm]."""
     velocity = (angle - state[S_ANGLE_1]) / period
     raw = 0.5 * (state[S_TORQUE_1] + state[S_TORQUE_2]) - config[C_NOMINAL_INERTIA] * (
         angle - 2.0 * state[S_ANGLE_1] + state[S_ANGLE_2]) / (period * period)

@@ -29,10 +29,10 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from contact.reduced import ReducedFingertip, bump_response
-from controller.calibration import EstimatorCalibration, calibrate_gain
-from controller.estimator import BumpLayout, BumpReference, EstimatorSettings, bump_positions, estimate_slip
-from controller.references import GraspPhase, ReferenceGenerator, ReferenceParameters
-from controller.sensor import PressureField, SensorArray, cell_force_operator
+from controller.estimation.calibration import EstimatorCalibration, calibrate_gain
+from controller.estimation.estimator import BumpLayout, BumpReference, EstimatorSettings, bump_positions, estimate_slip
+from controller.control.references import GraspPhase, ReferenceGenerator, ReferenceParameters
+from controller.sensing.sensor import PressureField, SensorArray, cell_force_operator
 
 from . import _sensing_kernel as S
 from ._trial import GRID_SPACING, TargetDesign

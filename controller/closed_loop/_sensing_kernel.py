@@ -1,9 +1,10 @@
 """Compiled form of the paper's estimator for the closed loop: per-bump force and CoP, reference, rigid fit.
 
-The same computations as ``controller.estimator.bump_positions`` (force and centre of pressure per bump region above
-a noise gate), the bench's reference table and ``controller.rigid_transform.fit_rigid_transform`` (2D Procrustes),
-for one frame of two fingertips: the closed loop reads them at 100 Hz, where the vectorised library functions spend
-milliseconds in array set-up per frame. The tests check them against the library functions.
+The same computations as ``controller.estimation.estimator.bump_positions`` (force and centre of pressure per bump
+region above a noise gate), the bench's reference table and
+``controller.estimation.rigid_transform.fit_rigid_transform`` (2D Procrustes), for one frame of two fingertips: the
+closed loop reads them at 100 Hz, where the vectorised library functions spend milliseconds in array set-up per frame.
+The tests check them against the library functions.
 """
 
 from __future__ import annotations

@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from contact.reduced import ReducedFingertip
-from controller.acceleration_control import AccelerationControlParameters
+from controller.control.acceleration_control import AccelerationControlParameters
 from fem.validation import check_positive, check_range
 
 GRAVITY = 9.81                      # m/s^2
@@ -107,8 +107,8 @@ class TargetDesign:
 class ControllerKind(enum.Enum):
     """The grasp-force controller of a trial."""
 
-    INCIPIENT_SLIP = "incipient_slip"                 # controller.incipient_slip: per-bump load ratios, probe
-    DISPLACEMENT_TARGETS = "displacement_targets"     # controller.grasp_force_control: u_x, theta to targets
+    INCIPIENT_SLIP = "incipient_slip"                 # controller.control.incipient_slip: per-bump load ratios, probe
+    DISPLACEMENT_TARGETS = "displacement_targets"     # controller.control.grasp_force_control: u_x, theta to targets
 
 
 @dataclass(frozen=True)

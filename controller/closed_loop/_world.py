@@ -15,12 +15,12 @@ from dataclasses import replace
 import numpy as np
 
 from contact.reduced import ReducedFingertip
-from controller.acceleration_control import AccelerationControlParameters
-from controller.grasp_force_control import GraspForceController, GraspForceParameters
-from controller.incipient_slip import IncipientSlipController, IncipientSlipParameters
-from controller.references import GraspPhase
+from controller.control.acceleration_control import AccelerationControlParameters
+from controller.control.grasp_force_control import GraspForceController, GraspForceParameters
+from controller.control.incipient_slip import IncipientSlipController, IncipientSlipParameters
+from controller.control.references import GraspPhase
 
-from controller._slip_frame import PHASE_CODES, SlipControllerState
+from controller.control._slip_frame import PHASE_CODES, SlipControllerState
 
 from . import _fused as F
 from . import _kernel as K
@@ -303,7 +303,7 @@ class _DisplacementLaw:
 
 
 class _IncipientSlip:
-    """The incipient-slip controller in its compiled form (``controller._slip_frame``), run by ``_fused``."""
+    """The incipient-slip controller in its compiled form (``controller.control._slip_frame``), run by ``_fused``."""
 
     def __init__(self, controller: IncipientSlipController):
         self.parameters = controller.parameters

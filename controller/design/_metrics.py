@@ -98,15 +98,15 @@ def estimation_metrics(shear, twist, array, layout, draws, frames: int) -> tuple
     .bump_shear_displacements``, against the press), not the plate's shift: force control up to Q / (mu P) = 0.95
     lets the bumps' edges slide, and the plate then runs ahead of the gel by the slip. The estimate is the gain
     times the bumps' mean CoP shift along x, the gain fitted per bump on the first two shear increments
-    (``controller.calibration.calibrate_gain``), the error taken over the others against the bumps' mean shear
-    displacement along x. Rotation: the eq. 9 rotation of the gain-scaled CoP shifts on the twist path against the
+    (``controller.estimation.calibration.calibrate_gain``), the error taken over the others against the bumps' mean
+    shear displacement along x. Rotation: the eq. 9 rotation of the gain-scaled CoP shifts on the twist path against the
     eq. 9 rotation of the bumps' own shear displacements (the plate's angle less the bumps' slip).
     """
     from contact.bumps import bump_shear_displacements
-    from controller.bench import averaged_cop_shifts, readings_operator
-    from controller.calibration import EstimatorCalibration, calibrate_gain
-    from controller.estimator import estimate_slip
-    from controller.rigid_transform import fit_rigid_transform
+    from controller.estimation.bench import averaged_cop_shifts, readings_operator
+    from controller.estimation.calibration import EstimatorCalibration, calibrate_gain
+    from controller.estimation.estimator import estimate_slip
+    from controller.estimation.rigid_transform import fit_rigid_transform
 
     bump_shift = bump_shear_displacements(shear)
     bump_shift = bump_shift[1:] - bump_shift[0]                                              # (t, k, 2) [mm]

@@ -4,7 +4,7 @@ Each node is a parallel-plate capacitor: a square electrode pad of side w = pitc
 pitch x pitch cell is the gap between pads, which senses nothing) over a compressible dielectric of thickness d_0.
 The chain from pressure to a reading, each effect switchable (``CapacitiveNode``):
 
-1. Pad integration: the pad force F_pad = int_pad p dA (``controller.sensor.cell_force_operator`` clips the FEM's
+1. Pad integration: the pad force F_pad = int_pad p dA (``controller.sensing.cell_force_operator`` clips the FEM's
    piecewise-linear field against the pad squares exactly); a uniform pressure gives F_pad = fill_factor x the
    cell's force. The top electrode is taken as rigid, so the pad sees its mean pressure p = F_pad / w^2.
 2. Dielectric strain with saturation: eps(p) = eps_max (1 - exp(-p / (eps_max E_d))) for p >= 0 (initial slope

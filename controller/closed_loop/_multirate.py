@@ -5,10 +5,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable
 
-from .acceleration_control import AccelerationController
-from .actuator import ActuatorPlant
-from .grasp_force_control import GraspForceController
-from .references import GraspPhase
+from controller.control.acceleration_control import AccelerationController
+from controller.plant.actuator import ActuatorPlant
+from controller.control.grasp_force_control import GraspForceController
+from controller.control.references import GraspPhase
 
 __all__ = ["LoopSample", "MultiRateRunner", "rate_ratio"]
 

@@ -1,21 +1,4 @@
-"""Fingertip design sweeps: designs through FEM -> sensor -> estimator, one row of metrics per design.
-
-A design (``FingertipDesign``) is the paper's kind of fingertip - rows x cols hemispheres (bump radius, pitch) on a
-base layer (thickness, footprint) of a linear-elastic gel (E, nu), read by a capacitive array (sensor pitch, pad
-fill factor). A study (``DesignStudy``) fixes what every design goes through: a rigid plate pressed with the grasp
-force, then (1) sheared by force control to the load ratios Q/(mu P) of ``load_ratios`` and (2), on another path from
-the same press, twisted about the array centre (angle control, for two or more bumps). The sensor reads the FEM's
-base pressure (``controller.sensor``, ``controller.capacitive``) and the estimator (``controller.estimator``) turns
-it into shear displacements and rotations. Metrics (``METRICS``, one column each): translational and rotational
-estimation errors, the stick-ratio drop near gross slip (the criterion of the paper's Figs. 3/4), force and torque
-capacity per unit grasp force, and the mesh's error estimate.
-
-``design_sweep`` runs many designs on dask.distributed (a LocalCluster by default, or a scheduler address) or in
-this process, resumable: with ``out_dir`` each design's record is written as it finishes and a re-run skips the
-designs recorded there (``fem.task_runner``). Designs that differ only in their sensor share one FEM solve (one
-task); designs of one geometry share its cached mesh, and a re-run reads the compliance columns from their disk cache.
-``python -m studies design DESIGN.toml`` is the command (file format: ``controller._design_file``).
-"""
+"""``design_sweep``: many fingertip designs through the study on dask or in this process, resumable."""
 
 from __future__ import annotations
 
@@ -24,12 +7,12 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from ._design_evaluate import design_record, evaluate_designs
-from ._design_file import DesignSweepSpec, load_design_file
-from ._design_metrics import METRICS
-from ._design_spec import (DesignStudy, FingertipDesign, SensorModel, design_id, design_scenes, fem_key,
+from ._evaluate import design_record, evaluate_designs
+from ._file import DesignSweepSpec, load_design_file
+from ._metrics import METRICS
+from ._spec import (DesignStudy, FingertipDesign, SensorModel, design_id, design_scenes, fem_key,
                            twist_angles)
-from ._design_table import DESIGN_COLUMNS, design_table, increment_table, pareto_front
+from ._table import DESIGN_COLUMNS, design_table, increment_table, pareto_front
 
 __all__ = ["FingertipDesign", "DesignStudy", "SensorModel", "METRICS", "design_scenes", "twist_angles",
            "evaluate_designs", "design_sweep", "design_table", "increment_table", "pareto_front", "design_id",

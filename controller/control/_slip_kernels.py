@@ -1,5 +1,6 @@
-"""Compiled kernels of the incipient-slip controller (``controller.incipient_slip``): the slip margin of an array of
-Coulomb point contacts, a fingertip's grip demand, the slip signature of one sensor frame and the frame's low-pass.
+"""Compiled kernels of the incipient-slip controller (``controller.control.incipient_slip``): the slip margin of an
+array of Coulomb point contacts, a fingertip's grip demand, the slip signature of one sensor frame and the frame's
+low-pass.
 
 numba, because they run once per sensor frame on a few dozen bumps inside the closed loop, where numpy's per-call
 overhead is larger than the arithmetic (a direction search over slip centres is not a vector operation).

@@ -33,7 +33,7 @@ import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from ._design_spec import DesignStudy, FingertipDesign
+from ._spec import DesignStudy, FingertipDesign
 
 if sys.version_info >= (3, 11):
     import tomllib

@@ -1,7 +1,8 @@
 """The FEM virtual bench of Figs. 6 and 9: an n x n hemisphere-array fingertip under a rigid plate, read by the sensor.
 
-The FEM gives the pressure on the gel's base (the sensor plane); controller.sensor integrates it over the nodes'
-cells and controller.estimator turns the readings into per-bump shear displacements and the eq. 9 rigid transform
+The FEM gives the pressure on the gel's base (the sensor plane); controller.sensing.sensor integrates it over the nodes'
+cells and controller.estimation.estimator turns the readings into per-bump shear displacements and the eq. 9 rigid
+transform
 - the same code the closed loop runs on the reduced model.
 """
 
@@ -72,8 +73,8 @@ def plate_shear_scene(name: str, gel, normal_force: float, load_ratios, size_con
 
 
 def base_pressure_field(result):
-    """The base pressure of every increment of an FEM result as a ``controller.sensor.PressureField`` (t frames)."""
-    from controller.sensor import PressureField
+    """The base pressure of every increment of an FEM result as a ``controller.sensing.PressureField`` (t frames)."""
+    from controller.sensing.sensor import PressureField
 
     base = result.model.base
     pressure = np.stack([increment.base_pressure for increment in result.increments])      # (t, n_base)
@@ -81,9 +82,9 @@ def base_pressure_field(result):
 
 
 def readings_operator(result, array):
-    """The pad-force operator of ``array`` on the base mesh of ``result`` (``controller.sensor.cell_force_operator``):
+    """The pad-force operator of ``array`` on the base mesh of ``result`` (``controller.sensing.cell_force_operator``):
     build it once per result and array, pass it to every frame and noise draw (its build costs ~20 frames)."""
-    from controller.sensor import cell_force_operator
+    from controller.sensing.sensor import cell_force_operator
 
     base = result.model.base                       # the mesh alone: no need to stack every increment's pressure
     return cell_force_operator(base.positions[:, :2], base.triangles, array)
@@ -93,7 +94,7 @@ def sensor_readings(result, array, rng=None, operator=None) -> np.ndarray:
     """Readings (t, ny, nx) [N] of ``array`` for every increment of an FEM result (one frame per increment; the
     node model's noise, if any, drawn from ``rng``: a Generator, a seed or None); ``operator`` from
     ``readings_operator`` (built here when None)."""
-    from controller.sensor import sample
+    from controller.sensing.sensor import sample
 
     operator = readings_operator(result, array) if operator is None else operator
     return sample(base_pressure_field(result), array, rng=rng, operator=operator)
@@ -101,14 +102,14 @@ def sensor_readings(result, array, rng=None, operator=None) -> np.ndarray:
 
 def sensor_array(pitch: float):
     """A node grid of the given pitch [mm] covering the 40 mm footprint."""
-    from controller.sensor import SensorArray
+    from controller.sensing.sensor import SensorArray
 
     count = int(round(FOOTPRINT / pitch))
     return SensorArray(pitch=pitch, node_counts=(count, count))
 
 
 def bump_layout(n: int):
-    from controller.estimator import BumpLayout
+    from controller.estimation.estimator import BumpLayout
 
     return BumpLayout.grid((n, n), FOOTPRINT / n)
 
@@ -116,7 +117,7 @@ def bump_layout(n: int):
 def shifts_of(result, array, layout, settings=None, rng=None):
     """Readings, the reference (the pressed, unsheared first increment) and the per-bump CoP shifts (t, k, 2) [mm]
     against it; ``settings`` (EstimatorSettings) default, ``rng`` for the sensor's noise (``sensor_readings``)."""
-    from controller.estimator import BumpReference, EstimatorSettings, estimate_slip
+    from controller.estimation.estimator import BumpReference, EstimatorSettings, estimate_slip
 
     settings = EstimatorSettings() if settings is None else settings
     readings = sensor_readings(result, array, rng)
@@ -128,7 +129,7 @@ def estimator_settings(array, frames: int = FRAMES_PER_STATE):
     """EstimatorSettings for ``array``: a noise gate at NOISE_GATE sigmas of a reading averaged over ``frames``
     frames when its node model has a noise floor, none otherwise (far from a bump the nodes read noise alone, and
     the centre of pressure would weigh it by its distance)."""
-    from controller.estimator import EstimatorSettings
+    from controller.estimation.estimator import EstimatorSettings
 
     if array.node is None or array.node.noise_floor == 0.0:
         return EstimatorSettings()
@@ -140,8 +141,8 @@ def averaged_cop_shifts(result, array, layout, seed=None, frames: int = FRAMES_P
     frames per increment (one frame for a noise-free node model); the noise drawn from ``seed``; ``operator`` from
     ``readings_operator`` (built once here when None). Also returns the readings (t, ny, nx) [N], the reference
     and the estimator settings used."""
-    from controller.estimator import BumpReference, estimate_slip
-    from controller.sensor import sample
+    from controller.estimation.estimator import BumpReference, estimate_slip
+    from controller.sensing.sensor import sample
 
     rng = np.random.default_rng(seed)
     count = 1 if array.node is None or array.node.noise_floor == 0.0 else frames

@@ -18,7 +18,7 @@ __all__ = ["SensorModel", "FingertipDesign", "DesignStudy", "design_id", "fem_ke
 class SensorModel(str, Enum):
     """The sensor a design is read with."""
 
-    CAPACITIVE = "capacitive"     # controller.capacitive: pads with 0.5 mm gaps set by pad_fill, the documented node
+    CAPACITIVE = "capacitive"     # sensing.capacitive: 0.5 mm gaps between pads (pad_fill), the documented node
     CELLS = "cells"               # the ideal array: whole cells, noise-free (pad_fill still sets the pads)
 
 
@@ -37,7 +37,7 @@ class FingertipDesign:
     base_width, base_depth : footprint [mm]; the sensor array covers it.
     """
 
-    bump_radius: float = 0.35 * 40.0 / 3.0      # the Fig. 6 / 9 bench's fingertip (controller.bench), exactly
+    bump_radius: float = 0.35 * 40.0 / 3.0      # exactly the Fig. 6 / 9 bench's fingertip (estimation.bench)
     rows: int = 3
     cols: int = 3
     pitch: float = 40.0 / 3.0
@@ -89,8 +89,8 @@ class FingertipDesign:
 
     def sensor(self, model: "SensorModel"):
         """The SensorArray reading this design: nodes at sensor_pitch over the footprint, pads of pad_fill."""
-        from controller.capacitive import CapacitiveNode
-        from controller.sensor import SensorArray
+        from controller.sensing.capacitive import CapacitiveNode
+        from controller.sensing.sensor import SensorArray
 
         counts = (max(1, round(self.base_width / self.sensor_pitch)),
                   max(1, round(self.base_depth / self.sensor_pitch)))
@@ -99,7 +99,7 @@ class FingertipDesign:
 
     def layout(self):
         """The estimator's BumpLayout: the bump centres."""
-        from controller.estimator import BumpLayout
+        from controller.estimation.estimator import BumpLayout
 
         return BumpLayout(tuple(map(tuple, self.geometry.bump_centers.tolist())))
 

@@ -7,9 +7,9 @@ pitch x pitch square centred on the node: the field is clipped against the cell 
 on convex polygons), so a field inside the array footprint keeps its total force to round-off. Offset, Gaussian noise
 and quantization follow, in that order (paper sec. IV-B: 11 x 13 nodes at 3 mm pitch, sampled at 100 Hz).
 
-A capacitive array (``capacitive_array``, ``controller.capacitive``) reads pads smaller than the cells, ``fill_factor``
-of the cell area, through a node model with a saturating pressure-capacitance curve, crosstalk, a noise floor and a
-converter. ``SensorArray()`` keeps the ideal cell integrator: fill 1 and no node model.
+A capacitive array (``capacitive_array``, ``controller.sensing.capacitive``) reads pads smaller than the cells,
+``fill_factor`` of the cell area, through a node model with a saturating pressure-capacitance curve, crosstalk, a noise
+floor and a converter. ``SensorArray()`` keeps the ideal cell integrator: fill 1 and no node model.
 """
 
 from __future__ import annotations
@@ -151,7 +151,7 @@ class SensorArray:
     fill_factor : float -- pad area / cell area [-], in (0, 1]: each node reads a centred square pad of side
         pitch sqrt(fill_factor); 1 (default) reads the whole cell.
     node : CapacitiveNode or None -- the capacitive node model the pad force goes through before offset, noise and
-        quantization above (``controller.capacitive``); None (default): the pad force itself.
+        quantization above (``controller.sensing.capacitive``); None (default): the pad force itself.
     """
 
     pitch: float = 3.0
@@ -349,8 +349,8 @@ def sample(field: PressureField, array: SensorArray, rng=None, operator=None) ->
 def capacitive_array(pitch: float = 3.0, node_counts: tuple[int, int] = (11, 13), centre=(0.0, 0.0),
                      pad_gap: float = 0.5, node: CapacitiveNode | None = None, **options) -> SensorArray:
     """A capacitive array: square pads with ``pad_gap`` [mm] between them (fill (1 - gap / pitch)^2) read through
-    ``node`` (default ``CapacitiveNode()``, the documented node of ``controller.capacitive``); ``options`` are the
-    other SensorArray fields. A 0.5 mm gap leaves 69 % of a 3 mm cell and 25 % of a 1 mm cell to the pad."""
+    ``node`` (default ``CapacitiveNode()``, the documented node of ``controller.sensing.capacitive``); ``options`` are
+    the other SensorArray fields. A 0.5 mm gap leaves 69 % of a 3 mm cell and 25 % of a 1 mm cell to the pad."""
     check_range("pad_gap", pad_gap, 0.0, pitch, "mm (at most the pitch)", high_open=True)
     return SensorArray(pitch=pitch, node_counts=node_counts, centre=centre, fill_factor=(1.0 - pad_gap / pitch) ** 2,
                        node=CapacitiveNode() if node is None else node, **options)

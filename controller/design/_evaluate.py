@@ -8,8 +8,8 @@ import os
 import socket
 import time
 
-from ._design_metrics import capacity_metrics, drop_metrics, estimation_metrics, mesh_metrics
-from ._design_spec import DesignStudy, FingertipDesign, SensorModel, design_scenes
+from ._metrics import capacity_metrics, drop_metrics, estimation_metrics, mesh_metrics
+from ._spec import DesignStudy, FingertipDesign, SensorModel, design_scenes
 
 __all__ = ["evaluate_designs", "design_record"]
 

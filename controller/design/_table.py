@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._design_metrics import METRICS
+from ._metrics import METRICS
 
 __all__ = ["DESIGN_COLUMNS", "TIMING_COLUMNS", "design_table", "increment_table", "pareto_front"]
 

@@ -1,4 +1,4 @@
-"""Compiled incipient-slip controller: the law of ``controller.incipient_slip`` with its state in numpy arrays.
+"""Compiled incipient-slip controller: the law of ``controller.control.incipient_slip`` with its state in numpy arrays.
 
 ``IncipientSlipController`` is the reference (a Python class, read and tested on its own); ``SlipControllerState``
 holds the same state in a few arrays so that the closed loop can observe a sensor frame and run the frame's control

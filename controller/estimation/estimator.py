@@ -20,7 +20,7 @@ from fem.validation import check_finite_array, check_positive, check_range
 
 from .calibration import EstimatorCalibration, PositionSource
 from .rigid_transform import FrameStatus, RigidTransformTrace, fit_rigid_transform
-from .sensor import SensorArray
+from controller.sensing.sensor import SensorArray
 
 __all__ = [
     "BumpLayout",
@@ -240,7 +240,7 @@ def estimate_slip(readings, array: SensorArray, layout: BumpLayout, reference: B
 
     Parameters
     ----------
-    readings : (ny, nx) or (t, ny, nx) float -- sensor readings [N] (``controller.sensor.sample``).
+    readings : (ny, nx) or (t, ny, nx) float -- sensor readings [N] (``controller.sensing.sensor.sample``).
     array, layout : the sensor and bump geometry.
     reference : BumpReference, optional -- unsheared positions; default the layout centres.
     calibration : EstimatorCalibration -- gain and position source.
