@@ -149,17 +149,29 @@ def test_array_margin_is_the_reduced_models_limit_of_point_contacts():
 
 
 def test_the_controller_sees_only_sensor_signals_and_the_phase():
-    """Its interface takes bump forces, load ratios, contacts, the sensor's ratio noise and the phase; no plant."""
+    """Its interface takes bump forces, load ratios, contacts, the sensor's ratio noise and the phase; the modules of
+    the law (the wrapper and its compiled kernels) import no plant, world or contact model, name no plant quantity
+    and read no attribute by a computed name (getattr(settings, "friction_" + "coefficient") would pass a name
+    check)."""
+    from controller.control import _slip_kernels, _slip_law, incipient_slip
+
     observe = list(inspect.signature(IncipientSlipController.observe).parameters)
     step = list(inspect.signature(IncipientSlipController.step).parameters)
     assert observe == ["self", "bump_force", "load_ratio", "in_contact", "ratio_noise"] and step == ["self", "phase"]
-    tree = ast.parse(inspect.getsource(inspect.getmodule(IncipientSlipController)))
-    imported = {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)} | \
-        {alias.name for node in ast.walk(tree) if isinstance(node, ast.Import) for alias in node.names}
-    assert not any(name and ("mujoco" in name or "closed_loop" in name or "contact" in name) for name in imported)
-    names = {node.id for node in ast.walk(tree) if isinstance(node, ast.Name)} | \
-        {node.attr for node in ast.walk(tree) if isinstance(node, ast.Attribute)}
-    assert not names & {"friction_coefficient", "mass", "moment_nm", "sliding", "gross_slip", "bridge"}
+    for module in (incipient_slip, _slip_law, _slip_kernels):
+        tree = ast.parse(inspect.getsource(module))
+        imported = {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)} | \
+            {alias.name for node in ast.walk(tree) if isinstance(node, ast.Import) for alias in node.names}
+        assert not any(name and any(word in name for word in ("mujoco", "closed_loop", "contact", "plant"))
+                       for name in imported), module.__name__
+        names = {node.id for node in ast.walk(tree) if isinstance(node, ast.Name)} | \
+            {node.attr for node in ast.walk(tree) if isinstance(node, ast.Attribute)}
+        assert not names & {"friction_coefficient", "mass", "moment_nm", "sliding", "gross_slip", "bridge",
+                            "settings"}, module.__name__
+        dynamic = [node for node in ast.walk(tree) if isinstance(node, ast.Call) and isinstance(node.func, ast.Name)
+                   and node.func.id in ("getattr", "eval", "exec", "vars", "globals")
+                   and not (node.func.id == "getattr" and isinstance(node.args[1], ast.Constant))]
+        assert not dynamic, f"{module.__name__} reads attributes by computed names"
 
 
 @pytest.mark.parametrize("changes, match", [

@@ -2,10 +2,10 @@
 
 One call of ``run_frames`` advances frames [first, stop) of a trial: per frame (100 Hz) the sensor reads the bump
 states the last physics step left (``_sensing_kernel.sense_frame``, with the frame's pre-drawn node noise), the
-compiled incipient-slip controller observes the per-bump loads (``controller.control._slip_frame.observe_frame``) and
+compiled incipient-slip controller observes the per-bump loads (``controller.control._slip_law.observe_frame``) and
 runs the frame's control steps (``control_step``), and the frame's physics steps follow (``_kernel.run_block``). The
-same arithmetic as the Python loop of ``GraspWorld.run`` (which still drives the displacement-target law) in the
-same order; what is left to Python between calls is the check whether the object touches the table in the hold.
+same arithmetic as the Python loop of ``GraspWorld.run`` (which drives the displacement-target law) in the same
+order: both call the kernels below for the command a physics step applies and for the drop check.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import math
 import numpy as np
 from fem.compiled import njit_cached
 
-from controller.control._slip_frame import APPROACH, RELEASE, X_FRICTION, X_TIME, control_step, observe_frame
+from controller.control._slip_law import APPROACH, RELEASE, X_FRICTION, X_TIME, control_step, observe_frame
 
 from . import _kernel as K
 from ._sensing_kernel import load_ratio_noise, sense_frame
@@ -55,6 +55,32 @@ def _frame_loads(sensing, buffers, noise, out, ratio_noise):
 
 
 @njit_cached
+def applied_command(command, phase, constant):
+    """The force [N] a control step applies: the controller's ``command``, or in a tau_min trial the ``constant``
+    force (NaN: none) in every phase after the approach, and 0 in the release."""
+    if math.isnan(constant) or phase == APPROACH:
+        return command
+    return constant if phase != RELEASE else 0.0
+
+
+@njit_cached
+def hold_commands(commands, held):
+    """The commands of a frame's control steps (c,) held by its physics steps (p, m): each physics step takes the
+    m control steps it spans (m > 1) or the one it lies in (m = 1)."""
+    controls, per_frame, spanned = commands.shape[0], held.shape[0], held.shape[1]
+    for j in range(per_frame):
+        for c in range(spanned):
+            held[j, c] = commands[j * controls // per_frame + c]
+
+
+@njit_cached
+def object_dropped(table_contacts, height, clearance):
+    """Whether a held object is down: MuJoCo found object-table contacts in the last step, or its bottom is below
+    ``clearance`` [m] (``height`` [m])."""
+    return table_contacts > 0.0 or height < clearance
+
+
+@njit_cached
 def run_frames(first, stop, noise, sensing, buffers, ratio_noise, loaded, controller, phases, constant, lift,
                commands, held, physics, mj_step, grasp_local, records, signals, hold, sensordata, table_sensor,
                clearance):
@@ -72,7 +98,6 @@ def run_frames(first, stop, noise, sensing, buffers, ratio_noise, loaded, contro
     threshold = sensing[5]
     load_force, load_ratio = buffers[4], buffers[5]
     controls, per_frame = commands.shape[0], held.shape[0]
-    spanned = held.shape[1]                                    # control steps per physics step (1: held over several)
     dropped = False
     for frame in range(first, stop):
         u_x, theta = _frame_loads(sensing, buffers, noise[frame - first], out, ratio_noise)
@@ -87,18 +112,14 @@ def run_frames(first, stop, noise, sensing, buffers, ratio_noise, loaded, contro
         command = 0.0
         for step in range(controls):
             phase = phases[frame * controls + step]
-            command = control_step(parameters, scalars, plateau, streak, phase)
-            if not math.isnan(constant) and phase != APPROACH:
-                command = constant if phase != RELEASE else 0.0
+            command = applied_command(control_step(parameters, scalars, plateau, streak, phase), phase, constant)
             commands[step] = command
-        for j in range(per_frame):
-            for c in range(spanned):
-                held[j, c] = commands[j * controls // per_frame + c]
+        hold_commands(commands, held)
         K.run_block(held, lift[frame * per_frame:(frame + 1) * per_frame], config, geometry, state, bumps, out, xpos,
                     xmat, xipos, qvel, xfrc_applied, mocap_pos, ctrl, model_address, data_address, mj_step,
                     grasp_local, records[frame])
         signals[frame, F_COMMAND], signals[frame, F_SHEAR], signals[frame, F_TWIST] = command, u_x, theta
         signals[frame, F_FRICTION] = scalars[X_FRICTION]
         if hold[frame] and not dropped:
-            dropped = sensordata[table_sensor] > 0.0 or records[frame, K.R_HEIGHT] < clearance
+            dropped = object_dropped(sensordata[table_sensor], records[frame, K.R_HEIGHT], clearance)
     return dropped

@@ -20,7 +20,7 @@ from controller.control.grasp_force_control import GraspForceController, GraspFo
 from controller.control.incipient_slip import IncipientSlipController, IncipientSlipParameters
 from controller.control.references import GraspPhase
 
-from controller.control._slip_frame import PHASE_CODES, SlipControllerState
+from controller.control._slip_law import PHASE_CODES
 
 from . import _fused as F
 from . import _kernel as K
@@ -179,7 +179,7 @@ class GraspWorld:
         # control steps per physics step: the commands of a frame's physics steps (one held over several steps when
         # the physics runs faster than the controller)
         held = np.zeros((per_frame, controls // per_frame if per_frame < controls else 1))
-        loop = self._compiled_loop if isinstance(self.grasp, _IncipientSlip) else self._python_loop
+        loop = self._compiled_loop if isinstance(self.grasp, IncipientSlipController) else self._python_loop
         start = time.perf_counter()
         dropped = loop(phases, lift, held, records, signals, hold_phase)
         wall = time.perf_counter() - start
@@ -191,10 +191,6 @@ class GraspWorld:
         return self._result(times, frame_phases, records, signals, dropped, self.bridge.peak_force_n, wall,
                             frames / sensor_rate)
 
-    def _dropped(self, record) -> bool:
-        """Whether the object touches the table or sank below the clearance (checked after each hold frame)."""
-        return self._touches_table() or record[K.R_HEIGHT] < TABLE_CLEARANCE_M
-
     def _compiled_loop(self, phases, lift, held, records, signals, hold_phase) -> bool:
         """The incipient-slip loop in compiled code (``_fused.run_frames``), the whole trial in one call; ``phases``
         the schedule index of each control step. Returns whether the object was found dropped."""
@@ -205,11 +201,13 @@ class GraspWorld:
         buffers = F.frame_buffers(count, sensing.operator.shape[0])
         dropped = F.run_frames(
             0, len(records), sensing.frame_noise(len(records)), sensing.compiled_inputs(), buffers,
-            np.zeros((2, count)), np.zeros((2, count), dtype=np.bool_), self.grasp.state.arrays(), codes, constant,
+            np.zeros((2, count)), np.zeros((2, count), dtype=np.bool_), self.grasp.arrays(), codes, constant,
             lift, np.zeros(controls), held, self.bridge.compiled_inputs(self.model, self.data), mujoco_step_function(),
             self._grasp_local_m, records, signals, hold_phase, self.data.sensordata, self.table_sensor,
             TABLE_CLEARANCE_M)
-        self.grasp.collect_events(signals)
+        seen = ~np.isnan(signals[:, F.F_EVENT])         # the slip events the compiled loop marked
+        self.grasp.slip_events.extend(zip(signals[seen, F.F_EVENT].tolist(),
+                                          signals[seen, F.F_EVENT_FRICTION].tolist()))
         return dropped
 
     def _python_loop(self, phases, lift, held, records, signals, hold_phase) -> bool:
@@ -218,8 +216,9 @@ class GraspWorld:
         was found dropped."""
         frames, per_frame = len(records), held.shape[0]
         controls = len(phases) // frames
+        codes = np.array([PHASE_CODES[phase] for _, phase in self.schedule], dtype=np.int64)[phases]
         phases = [self.schedule[i][1] for i in phases]
-        constant = self.settings.constant_force
+        constant = math.nan if self.settings.constant_force is None else float(self.settings.constant_force)
         bridge, grasp, sensing = self.bridge, self.grasp, self.sensing
         commands, command, dropped = np.zeros(controls), 0.0, False
         for frame_index in range(frames):
@@ -227,19 +226,16 @@ class GraspWorld:
             grasp.observe(frame)
             first = frame_index * controls
             for step in range(controls):
-                phase = phases[first + step]
-                command = grasp.step(phase)
-                if constant is not None and phase is not GraspPhase.APPROACH:
-                    command = constant if phase is not GraspPhase.RELEASE else 0.0
+                command = F.applied_command(grasp.step(phases[first + step]), codes[first + step], constant)
                 commands[step] = command
-            held[:] = commands.reshape(per_frame, -1) if held.shape[1] > 1 else \
-                commands[np.arange(per_frame) * controls // per_frame, None]
+            F.hold_commands(commands, held)
             bridge.run(self.model, self.data, held, lift[frame_index * per_frame:(frame_index + 1) * per_frame],
                        self._grasp_local_m, records[frame_index])
             signals[frame_index, :F.F_EVENT] = (command, frame.shear_displacement, frame.twist_angle,
                                                 grasp.friction_estimate)
             if hold_phase[frame_index] and not dropped:
-                dropped = self._dropped(records[frame_index])
+                dropped = F.object_dropped(self.data.sensordata[self.table_sensor], records[frame_index, K.R_HEIGHT],
+                                           TABLE_CLEARANCE_M)
         return dropped
 
     def _result(self, times, phases, records, signals, dropped, force_peak, wall, simulated) -> TrialResult:
@@ -302,32 +298,6 @@ class _DisplacementLaw:
         return self.controller.step(*self._inputs, phase)
 
 
-class _IncipientSlip:
-    """The incipient-slip controller in its compiled form (``controller.control._slip_frame``), run by ``_fused``."""
-
-    def __init__(self, controller: IncipientSlipController):
-        self.parameters = controller.parameters
-        self.state = SlipControllerState(controller)
-
-    @property
-    def minimum_force(self):
-        return self.state.minimum_force
-
-    @property
-    def friction_estimate(self) -> float:
-        return self.state.friction_estimate
-
-    @property
-    def slip_events(self) -> list:
-        return self.state.slip_events
-
-    def collect_events(self, signals) -> None:
-        """The slip events the compiled loop marked in ``signals`` ((time [s], mu_hat) per detection)."""
-        seen = ~np.isnan(signals[:, F.F_EVENT])
-        self.state.slip_events.extend(zip(signals[seen, F.F_EVENT].tolist(),
-                                          signals[seen, F.F_EVENT_FRICTION].tolist()))
-
-
 def _controller(settings: TrialSettings, parameters, sensing: SensingChain, tip: ReducedFingertip):
     """The trial's controller, fed only what the sensor reports (``observe``) and the phase (``step``)."""
     limit = TORQUE_LIMIT / ARM_RADIUS
@@ -345,9 +315,9 @@ def _controller(settings: TrialSettings, parameters, sensing: SensingChain, tip:
         raise ValueError(f"controller_parameters must be IncipientSlipParameters for {settings.controller.value}, "
                          f"got {type(base).__name__}")
     frame_rate = sensing.array.sample_rate_hz
-    return _IncipientSlip(IncipientSlipController(
+    return IncipientSlipController(
         replace(base, rotational_slip_detection=settings.rotational_slip_detection, frame_rate_hz=frame_rate),
-        tip.centres))
+        tip.centres)
 
 
 def run_trial(obj: GraspObject, settings: TrialSettings | None = None, **options) -> TrialResult:

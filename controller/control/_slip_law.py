@@ -1,11 +1,10 @@
-"""Compiled incipient-slip controller: the law of ``controller.control.incipient_slip`` with its state in numpy arrays.
+"""The incipient-slip law (``controller.control.incipient_slip``, whose docstring states it) as compiled kernels on
+the controller's state arrays: ``observe_frame`` at each sensor frame, ``control_step`` at each control step.
 
-``IncipientSlipController`` is the reference (a Python class, read and tested on its own); ``SlipControllerState``
-holds the same state in a few arrays so that the closed loop can observe a sensor frame and run the frame's control
-steps inside compiled code (``observe_frame``, ``control_step``) without returning to Python. Every branch mirrors
-the reference one for one; the tests run both on one recorded input sequence and compare commands, estimates and
-slip events. Python's min / max (which keep the first argument unless the second is strictly smaller / larger) are
-spelled out where a NaN or an infinity can meet them, so the two agree there too.
+This is the one source of the law: ``IncipientSlipController`` is a thin Python wrapper that owns the arrays and
+calls these kernels, and the closed loop's fused frame loop (``controller.closed_loop._fused``) calls the same
+kernels on the same arrays without returning to Python. numba, because the law runs per frame on a few dozen bumps
+inside the closed loop, where Python's per-call overhead is larger than the arithmetic.
 """
 
 from __future__ import annotations
@@ -16,10 +15,9 @@ import numpy as np
 from fem.compiled import njit_cached
 
 from ._slip_kernels import fingertip_need, low_pass_frame, slip_signature
-from .incipient_slip import FULL_SEARCH_EVERY, NOISE_MARGIN, IncipientSlipController
 from .references import GraspPhase
 
-__all__ = ["SlipControllerState", "observe_frame", "control_step", "PHASE_CODES"]
+__all__ = ["observe_frame", "control_step", "PHASE_CODES"]
 
 PHASE_CODES = {phase: code for code, phase in enumerate(GraspPhase)}     # GraspPhase -> int for compiled code
 APPROACH, GRASP, LIFT, HOLD, PLACE, RELEASE = (PHASE_CODES[phase] for phase in GraspPhase)
@@ -36,98 +34,15 @@ APPROACH, GRASP, LIFT, HOLD, PLACE, RELEASE = (PHASE_CODES[phase] for phase in G
 FAST, FAST_PREVIOUS, SLOW, SLOW_PREVIOUS, RATIO_NOISE = range(5)
 
 
-class SlipControllerState:
-    """The state of a new ``IncipientSlipController`` in arrays (module docstring); ``observe`` / ``step`` as the
-    reference class, for tests and for callers that drive it from Python.
-
-    Arrays: ``parameters`` (P_SIZE,), ``centres`` (k, 2) [mm], ``second_frame`` (2,), ``scalars`` (X_SIZE,),
-    ``contact`` (2, k) bool, ``signals`` (5, 2, k) [N] (fast and slow filters with their previous inputs, the ratio
-    noise), ``ratios`` (4, 2, k, 2) [-] (the same for the load ratios), ``plateau`` (2,), ``history_force`` and
-    ``history_ratios`` (watch_frames, 2, k), ``streak`` (2, k + 1) int, ``slip_centre`` (2, 2) [mm].
-    """
-
-    def __init__(self, controller: IncipientSlipController):
-        if controller.time != 0.0 or controller._started:
-            raise ValueError("SlipControllerState takes a controller that has not observed or stepped yet")
-        p = controller.parameters
-        self.centres = np.ascontiguousarray(controller.centres, dtype=float)
-        self.second_frame = np.ascontiguousarray(controller.second_frame, dtype=float)
-        count = len(self.centres)
-        reach = float(np.hypot(self.centres[:, 0], self.centres[:, 1]).max())
-        values = np.zeros(P_SIZE)
-        values[P_PERIOD] = controller.period
-        values[P_FAST_GAIN], values[P_SLOW_GAIN] = controller._signals.gain, controller._watched.gain
-        for slot, value in ((P_APPROACH_FORCE, p.approach_force), (P_RAMP_RATE, p.ramp_rate),
-                            (P_MAXIMUM_FORCE, p.maximum_force), (P_LOOP_RATE, p.loop_rate),
-                            (P_RELEASE_LOOP_RATE, p.release_loop_rate), (P_SAFETY, p.safety_fraction),
-                            (P_LIFT_SAFETY, p.lift_safety_fraction), (P_PRIOR_FRICTION, p.prior_friction),
-                            (P_MAXIMUM_FRICTION, p.maximum_friction), (P_PROBE_RATE, p.probe_rate),
-                            (P_PROBE_DELAY, p.probe_delay), (P_TOTAL_DROP, p.total_drop),
-                            (P_WATCH_TIME, p.watch_frames / p.frame_rate_hz), (P_FORCE_DROP, p.force_drop),
-                            (P_STICK_EXPONENT, p.stick_exponent), (P_CONFIRM_FRAMES, p.confirm_frames),
-                            (P_LOADED_SHARE, p.loaded_share), (P_FORCE_SHARE, p.force_share),
-                            (P_RELEASE_RATE, p.release_rate), (P_ROTATIONAL, float(p.rotational_slip_detection)),
-                            (P_NOISE_MARGIN, NOISE_MARGIN), (P_FULL_SEARCH_EVERY, FULL_SEARCH_EVERY),
-                            (P_WARM_STEP, 0.1 * reach)):
-            values[slot] = value
-        self.parameters = values
-        self.scalars = np.zeros(X_SIZE)
-        self.scalars[X_COMMAND], self.scalars[X_MINIMUM] = p.approach_force, math.nan
-        self.scalars[X_FRICTION] = p.prior_friction
-        self.contact = np.zeros((2, count), dtype=np.bool_)
-        self.signals = np.zeros((5, 2, count))
-        self.ratios = np.zeros((4, 2, count, 2))
-        self.plateau = np.full(2, -1.0)
-        self.history_force = np.zeros((p.watch_frames, 2, count))
-        self.history_ratios = np.zeros((p.watch_frames, 2, count))
-        self.streak = np.zeros((2, count + 1), dtype=np.int64)
-        self.slip_centre = np.full((2, 2), math.inf)
-        self.slip_events: list[tuple[float, float]] = []
-
-    def arrays(self) -> tuple:
-        """The arrays ``observe_frame`` takes after the frame's inputs, in its order."""
-        return (self.parameters, self.centres, self.second_frame, self.scalars, self.contact, self.signals,
-                self.ratios, self.plateau, self.history_force, self.history_ratios, self.streak, self.slip_centre)
-
-    def observe(self, bump_force, load_ratio, in_contact, ratio_noise=None) -> None:
-        """As ``IncipientSlipController.observe``."""
-        noise = np.zeros(self.contact.shape) if ratio_noise is None else np.asarray(ratio_noise, dtype=float)
-        if observe_frame(np.ascontiguousarray(bump_force, dtype=float), np.ascontiguousarray(load_ratio, dtype=float),
-                         np.ascontiguousarray(in_contact, dtype=np.bool_), np.ascontiguousarray(noise),
-                         *self.arrays()):
-            self.slip_events.append((float(self.scalars[X_TIME]), float(self.scalars[X_FRICTION])))
-
-    def step(self, phase: GraspPhase) -> float:
-        """As ``IncipientSlipController.step``."""
-        return control_step(self.parameters, self.scalars, self.plateau, self.streak, PHASE_CODES[GraspPhase(phase)])
-
-    @property
-    def command(self) -> float:
-        return float(self.scalars[X_COMMAND])
-
-    @property
-    def minimum_force(self) -> float | None:
-        value = float(self.scalars[X_MINIMUM])
-        return None if math.isnan(value) else value
-
-    @property
-    def friction_estimate(self) -> float:
-        return float(self.scalars[X_FRICTION])
-
-    @property
-    def need(self) -> float:
-        return float(self.scalars[X_NEED])
-
-
 @njit_cached(inline="always")
 def _first_min(a, b):
-    """Python's min(a, b): b only if it is strictly smaller."""
+    """min(a, b) that keeps a unless b is strictly smaller (a NaN b keeps a)."""
     return b if b < a else a
 
 
 @njit_cached(inline="always")
 def _first_max(a, b):
-    """Python's max(a, b): b only if it is strictly larger."""
+    """max(a, b) that keeps a unless b is strictly larger (a NaN b keeps a)."""
     return b if b > a else a
 
 
@@ -148,7 +63,7 @@ def _target(parameters, scalars):
 @njit_cached
 def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, centres, second_frame, scalars,
                   contact, signals, ratios, plateau, history_force, history_ratios, streak, slip_centre):
-    """``IncipientSlipController.observe`` on the state arrays: bump forces (2, k) [N], load ratios (2, k, 2) [-],
+    """Take a sensor frame on the state arrays: bump forces (2, k) [N], load ratios (2, k, 2) [-],
     in contact (2, k) bool, ratio noise (2, k) [-]. True when the slip watch saw a slip (the event is
     (scalars[X_TIME], scalars[X_FRICTION]))."""
     count = centres.shape[0]
@@ -174,7 +89,7 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
                                      slip_centre, full, parameters[P_WARM_STEP])
     if scalars[X_WATCHING] == 0.0:
         return False
-    # the slip watch (IncipientSlipController._watch)
+    # the slip watch (module docstring of incipient_slip: per-bump ratios against their forces, the total load)
     frames = history_force.shape[0]
     seen = scalars[X_SLIP_SEEN] > 0.0
     hold_ratio = parameters[P_SAFETY] * scalars[X_FRICTION] if seen else 0.0
@@ -215,7 +130,7 @@ def _latch_minimum(scalars):
 
 @njit_cached
 def control_step(parameters, scalars, plateau, streak, phase):
-    """``IncipientSlipController.step`` on the state arrays, ``phase`` a ``PHASE_CODES`` value -> command [N]."""
+    """One control step on the state arrays, ``phase`` a ``PHASE_CODES`` value -> command [N]."""
     period = parameters[P_PERIOD]
     scalars[X_TIME] += period
     if phase != RELEASE:
