@@ -83,10 +83,13 @@ def run_trial_table(path: Path, jobs: list[tuple[str, object, object, dict]], ro
 
 
 def _with_required_force(function: Callable, obj, settings) -> tuple:
-    # the slip limit (a third of a second each) is found in the workers, with the trial, and only for missing rows
+    # the slip limit (a third of a second each) is found in the workers, with the trial, and only for missing rows;
+    # of the trial's own build (its plant factors change the bump laws)
     from controller.closed_loop import required_grip_force
+    from controller.plant import plant_mechanics
 
-    return function(obj, settings), required_grip_force(obj, settings.friction_coefficient)
+    return function(obj, settings), required_grip_force(obj, settings.friction_coefficient,
+                                                        plant_mechanics(settings.plant))
 
 
 def coerce(row: dict) -> dict:
@@ -103,3 +106,78 @@ def coerce(row: dict) -> dict:
             except ValueError:
                 out[name] = value
     return out
+
+
+def add_plant_arguments(parser) -> None:
+    """The closed-loop studies' options on the plant the controller does not know (docs/design.md, sec. 9)."""
+    parser.add_argument("--plant-spread", type=float, default=None, metavar="E",
+                        help="each plant factor uniform in +-E per trial (default 0.1; 0: the nominal build)")
+    parser.add_argument("--plant", default=None, metavar="NAME=E,...",
+                        help="fixed plant factors instead (kernel_width, couple_arm, youngs_modulus, bump_height, "
+                             "node_gain, friction_anisotropy; relative errors, e.g. couple_arm=0.15)")
+    parser.add_argument("--sensor-plane", default="fem", choices=["fem", "model"],
+                        help="fem: the plant's sensor from the FEM read by capacitive nodes (default); model: the "
+                             "estimator's own model read by ideal cells (the known world of earlier rounds)")
+
+
+def plant_options(plant_spread=None, plant=None, sensor_plane="fem") -> dict:
+    """Checked options of ``add_plant_arguments`` as keywords of ``trial_settings``."""
+    from controller.closed_loop import PLANT_SPREAD
+    from controller.plant import FACTOR_LIMIT, PlantFactors, SensorPlane
+
+    spread = PLANT_SPREAD if plant_spread is None else plant_spread
+    if isinstance(spread, bool) or not isinstance(spread, (int, float)) or not 0.0 <= spread <= FACTOR_LIMIT:
+        raise ValueError(f"--plant-spread={plant_spread!r} must be a number in [0, {FACTOR_LIMIT}]")
+    factors = None if plant is None else (plant if isinstance(plant, PlantFactors) else PlantFactors.parse(plant))
+    try:
+        plane = SensorPlane(sensor_plane)
+    except ValueError:
+        raise ValueError(f"--sensor-plane={sensor_plane!r} is not one of {[p.value for p in SensorPlane]}") from None
+    return dict(plant_spread=float(spread), plant=factors, sensor_plane=plane)
+
+
+def plant_description(options: dict) -> str:
+    """A figure title's words for ``plant_options``: sensor plane, plant factors and the friction range."""
+    from controller.closed_loop import FRICTION_RANGE
+
+    fixed = options["plant"].nonzero() if options["plant"] is not None else None
+    plant = ("nominal plant" if fixed == {} else
+             "plant " + ", ".join(f"{name} {100 * value:+.0f} %" for name, value in fixed.items()) if fixed
+             else f"plant factors +-{100 * options['plant_spread']:.0f} %")
+    return (f"{options['sensor_plane'].value} sensor plane, {plant}, "
+            f"mu {FRICTION_RANGE[0]:g}-{FRICTION_RANGE[1]:g}")
+
+
+def trial_settings(rng, plant_spread: float, plant=None, sensor_plane="fem", **fixed):
+    """A randomised trial (``random_settings``: friction 0.2-1.2, jitter, noise, plant factors within
+    +-``plant_spread``), with ``plant`` (fixed factors) in place of the drawn ones if given. The draws are the
+    same whatever the plant options, so the same seed gives the same objects, frictions and jitter."""
+    from dataclasses import replace
+
+    from controller.closed_loop import random_settings
+
+    settings = random_settings(rng, plant_spread=plant_spread, **fixed)
+    if plant is not None:
+        settings = replace(settings, plant=plant)
+    return replace(settings, sensor_plane=sensor_plane)
+
+
+def outcome_columns(result, required: float, crush_force: float) -> dict:
+    """The per-trial columns every closed-loop table shares: outcome, held-still measures, the friction estimate and
+    whether the trial could be held at all (its slip limit below the object's crush force)."""
+    import math
+
+    settings = result.settings
+    columns = dict(outcome=result.outcome, success=result.success, dropped=result.dropped, crushed=result.crushed,
+                   rotated=result.rotated, feasible=bool(required < crush_force),
+                   hold_slip_mm=result.hold_slip_mm, hold_rotation_mrad=result.hold_rotation_mrad,
+                   max_rotation_mrad=result.max_rotation_mrad,
+                   creep_after_friction_um_per_s=result.creep_after_friction_um_per_s,
+                   friction_estimate=result.friction_estimate,
+                   friction_estimate_error=result.friction_estimate / settings.friction_coefficient - 1.0
+                   if math.isfinite(result.friction_estimate) else math.nan,
+                   slips_detected=len(result.slip_events),
+                   first_slip=result.slip_events[0][2] if result.slip_events else "",
+                   sensor_plane=settings.sensor_plane.value)
+    columns.update({f"plant_{name}": value for name, value in vars(settings.plant).items()})
+    return columns

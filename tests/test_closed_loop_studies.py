@@ -37,17 +37,25 @@ def _rows(path):
         return list(csv.DictReader(stream))
 
 
-def test_table1_quick_succeeds_resumes_and_reports_intervals(tmp_path, monkeypatch):
-    from controller.closed_loop import _batch
+def test_table1_quick_counts_outcomes_resumes_and_reports_intervals(tmp_path, monkeypatch):
+    # one held-out trial per object: whether it holds is the study's finding, not this test's (a lucky draw); the
+    # summary must count the rows' outcomes and give the Wilson interval of that count
+    from controller.closed_loop import OUTCOMES, _batch
     from studies import table1
 
     summary = table1.run(tmp_path, quick=True, trials=1, processes=1)
     rows = _rows(tmp_path / "table1.csv")
-    assert len(rows) == 3 and all(row["success"] == "True" for row in rows)
-    for entry in summary["objects"].values():
-        low, high = entry["success_interval"]
-        assert entry["success"] == "1/1" and 0.0 < low < 0.25 and high == pytest.approx(1.0)   # Wilson, n = 1
-    assert summary["dropped"] == summary["crushed"] == 0
+    assert len(rows) == 3 and {row["object"] for row in rows} == set(summary["objects"])
+    for row in rows:
+        entry = summary["objects"][row["object"]]
+        held = row["outcome"] == "held"
+        assert row["outcome"] in OUTCOMES and row["success"] == str(held)
+        assert entry["success"] == f"{int(held)}/1" and sum(entry[outcome] for outcome in OUTCOMES) == 1
+        low, high = entry["success_interval"]                                  # Wilson, n = 1, z = 1.96
+        assert (0.0 < low < 0.25 and high == pytest.approx(1.0)) if held else (low == 0.0 and 0.75 < high < 1.0)
+        assert (row["feasible"] == "True") == (float(row["required_force"]) < float(row["crush_force"]))
+    for outcome in ("dropped", "crushed", "turned_out"):
+        assert summary[outcome] == sum(row["outcome"] == outcome for row in rows)
     ran = []
     monkeypatch.setattr(_batch, "_call", lambda *args: ran.append(args) or (_ for _ in ()).throw(AssertionError))
     again = table1.run(tmp_path, quick=True, trials=1, processes=1)            # every trial is in the CSV

@@ -41,7 +41,7 @@ class QuasiStaticPlant:
                 np.ones((2, len(TIP.centres)), dtype=bool))
 
 
-def _run(plant, parameters=IncipientSlipParameters(), hold=4.0):
+def _run(plant, parameters=IncipientSlipParameters(), hold=6.0):
     """Grasp (the load is there from the start: the object hangs), then hold; log (time, grip, sliding, gross)."""
     controller = IncipientSlipController(parameters, TIP.centres, SAME_FRAME)
     controller.minimum_force = 0.5
@@ -113,7 +113,7 @@ def test_a_stuck_array_under_a_growing_force_is_not_seen_as_slip():
 
 @pytest.mark.parametrize("noise", [0.0, 0.03])
 def test_a_sliding_bump_is_seen_and_a_stuck_one_is_not(noise):
-    """The watch's test on one window: the grip fell 12 % (a 25-frame window of the probe at 0.5/s). A bump on its
+    """The watch's test on one window: the grip fell 7 % (a 25-frame window of the probe at 0.3/s). A bump on its
     friction limit keeps |rho| = mu = 0.7; a stuck bump's load is fixed, so its ratio rises like P^-1 (at least
     P^-2/3, the bound the test sits just under). With the sensor's noise margin (3 sigma ~ 0.03 at 1-2 mN per node)
     the sliding bump must still be told apart."""
@@ -128,10 +128,12 @@ def test_a_sliding_bump_is_seen_and_a_stuck_one_is_not(noise):
     ratio = np.zeros((2, centres, 2))
     ratio[..., 0] = ratios_then / (force / force_then) ** (2.0 / 3.0)    # stuck: the slowest rise a stuck bump has
     ratio[0, 0, 0] = 0.7                                                 # sliding: flat at mu
-    signature = slip_signature(force, ratio, np.ones((2, centres), dtype=bool), force_then, ratios_then, True,
-                               np.full(2, -1.0), np.ones(2), 0.0, parameters.total_drop, parameters.force_drop,
-                               parameters.stick_exponent, parameters.loaded_share, parameters.force_share,
-                               np.full((2, centres), noise))[0]
+    contact = np.ones((2, centres), dtype=bool)
+    signature = slip_signature(force, ratio, force, ratio, contact, TIP.centres, force_then, ratios_then, True, False,
+                               np.full(3, -1.0), np.zeros(3), np.ones(2), 0.0, parameters.total_drop,
+                               parameters.force_drop, parameters.stick_exponent, parameters.loaded_share,
+                               parameters.force_share, np.full((2, centres), noise), 0.0, 18.9, np.zeros(2),
+                               np.zeros(2), 0.0, 0, 0.0, 0.02, 0.8)[0]
     assert signature[0, 0]
     assert not signature[:, :centres].ravel()[1:].any()
     assert not signature[:, centres].any()                 # the total: the load was not seen to fall (first frame)

@@ -53,21 +53,24 @@ import numpy as np
 from fem.validation import check_positive, check_range
 
 from ._slip_kernels import array_margin
-from ._slip_law import (P_APPROACH_FORCE, P_CONFIRM_FRAMES, P_FAST_GAIN, P_FORCE_DROP, P_FORCE_SHARE,
-                        P_FULL_SEARCH_EVERY, P_LIFT_SAFETY, P_LOADED_SHARE, P_LOOP_RATE, P_MAXIMUM_FORCE,
-                        P_MAXIMUM_FRICTION, P_NOISE_MARGIN, P_PERIOD, P_PRIOR_FRICTION, P_PROBE_DELAY, P_PROBE_RATE,
-                        P_RAMP_RATE, P_RELEASE_LOOP_RATE, P_RELEASE_RATE, P_ROTATIONAL, P_SAFETY, P_SIZE, P_SLOW_GAIN,
-                        P_STICK_EXPONENT, P_TOTAL_DROP, P_WARM_STEP, P_WATCH_TIME, PHASE_CODES, X_COMMAND,
-                        X_FRICTION, X_MINIMUM, X_NEED, X_PROBING, X_SIZE, X_SLIP_SEEN, X_TIME, control_step,
-                        observe_frame)
+from ._slip_law import (PHASE_CODES, P_APPROACH_FORCE, P_CONFIRM_FRAMES, P_FAST_GAIN, P_FORCE_DROP, P_FORCE_SHARE,
+                        P_FULL_SEARCH_EVERY, P_GROSS_FRAMES, P_LIFT_SAFETY, P_LOADED_SHARE, P_LOOP_RATE,
+                        P_MAXIMUM_FORCE, P_MAXIMUM_FRICTION, P_NOISE_MARGIN, P_PERIOD, P_PRIOR_FRICTION, P_PROBE_DELAY,
+                        P_PROBE_RATE, P_RAMP_RATE, P_REACH, P_RELEASE_LOOP_RATE, P_RELEASE_RATE, P_ROTATIONAL, P_SAFETY,
+                        P_SCALE_GAIN, P_SIZE, P_SLOW_GAIN, P_STALL_FRACTION, P_STALL_RISE, P_STICK_EXPONENT,
+                        P_TOTAL_DROP, P_WARM_STEP, P_WATCH_TIME, SLIP_KINDS, X_COMMAND, X_FRICTION, X_MINIMUM, X_NEED,
+                        X_PROBING, X_SIZE, X_SLIP_SEEN, X_TIME, control_step, observe_frame)
 from .filters import sample_period, tustin_gain
 from .references import GraspPhase
 
 FULL_SEARCH_EVERY = 10              # frames between full searches of the array's slip centre (warm starts between)
-# a bump's ratio must rise less than a stuck bump's by this many of its estimate's standard deviations (raw, per frame;
-# the slow watch filter and the window's difference leave about 0.6 of it): 3 x 0.6 ~ 2 sigma of the compared values,
-# the largest of some 18 bumps over a few frames
-NOISE_MARGIN = 3.0
+# a bump's ratio must rise less than a stuck bump's by this many standard deviations of the compared difference
+# (two slowly filtered values); two bumps of a fingertip must show it (``_slip_law``), which keeps noise out
+NOISE_MARGIN = 2.5
+SCALE_TIME = 1.0                    # s: the sensed force is put in the force loop's scale over this time
+GROSS_WINDOW = 0.1                  # s: a load that fell within this time, as fast as the grip, slid
+STALL_RISE = 0.02                   # a lift's utilisation that rose less than this over the window has stalled
+STALL_FRACTION = 0.8                # ... below this share of the lift's level: the bumps slide below the prior
 
 __all__ = ["IncipientSlipParameters", "IncipientSlipController", "array_margin", "law_parameters"]
 
@@ -117,9 +120,9 @@ class IncipientSlipParameters:
     lift_safety_fraction: float = 0.7
     prior_friction: float = 0.4
     maximum_friction: float = 2.0
-    probe_rate: float = 0.5
-    probe_delay: float = 0.5
-    total_drop: float = 0.03
+    probe_rate: float = 0.3
+    probe_delay: float = 1.2
+    total_drop: float = 0.015
     watch_frames: int = 25
     force_drop: float = 0.04
     stick_exponent: float = 0.6
@@ -171,7 +174,8 @@ class IncipientSlipController:
     ``_slip_law`` (``observe_frame``, ``control_step``), which the closed loop's fused frame loop calls on the same
     arrays. Read-outs: ``command`` [N], ``minimum_force`` [N] (None until two contacts), ``friction_estimate``
     mu_hat [-], ``probing`` / ``slip_seen``, ``need`` [N] (F / lambda*(mu = 1) of the more loaded fingertip: the
-    grip at which it would slide at mu = 1), ``time`` [s] and ``slip_events`` ((time [s], mu_hat) per detection).
+    grip at which it would slide at mu = 1), ``time`` [s] and ``slip_events`` ((time [s], mu_hat, kind) per
+    detection; kind 'bump', 'gross' or 'array').
 
     Parameters
     ----------
@@ -198,9 +202,11 @@ class IncipientSlipController:
         self.contact = np.zeros((2, count), dtype=np.bool_)
         self.signals = np.zeros((5, 2, count))            # fast and slow filters with their previous inputs, noise
         self.ratios = np.zeros((4, 2, count, 2))          # the same for the load ratios
-        self.plateau = np.full(2, -1.0)                   # (|total load|, sum P) when the watch began (-1: not yet)
+        self.plateau = np.array([-1.0, -1.0, 0.0])        # (wrench, sum P) when the watch began (-1: not yet), watched
         self.history_force = np.zeros((parameters.watch_frames, 2, count))
         self.history_ratios = np.zeros((parameters.watch_frames, 2, count))
+        # the array's utilisation and sensed force, the carried force, moment / reach and sensed force (all slow)
+        self.history_use = np.zeros((parameters.watch_frames, 5))
         self.streak = np.zeros((2, count + 1), dtype=np.int64)     # frames each bump / the total has slid
         self.slip_centre = np.full((2, 2), math.inf)      # each fingertip's last slip centre [mm] (warm starts)
         self.slip_events: list[tuple[float, float]] = []
@@ -208,16 +214,18 @@ class IncipientSlipController:
     def arrays(self) -> tuple:
         """The state arrays, in the order ``observe_frame`` takes them after the frame's inputs."""
         return (self.law, self.centres, self.second_frame, self.scalars, self.contact, self.signals, self.ratios,
-                self.plateau, self.history_force, self.history_ratios, self.streak, self.slip_centre)
+                self.plateau, self.history_force, self.history_ratios, self.history_use, self.streak, self.slip_centre)
 
     def observe(self, bump_force, load_ratio, in_contact, ratio_noise=None) -> None:
         """Take a sensor frame: bump forces (2, k) [N], load-ratio estimates (2, k, 2) [-], in-contact (2, k), and
         the standard deviation of each ratio estimate (2, k) [-] if the sensor gives it (None: noise-free)."""
         noise = np.zeros(self.contact.shape) if ratio_noise is None else ratio_noise
-        if observe_frame(np.ascontiguousarray(bump_force, dtype=float), np.ascontiguousarray(load_ratio, dtype=float),
-                         np.ascontiguousarray(in_contact, dtype=np.bool_), np.ascontiguousarray(noise, dtype=float),
-                         *self.arrays()):
-            self.slip_events.append((self.time, self.friction_estimate))
+        kind = observe_frame(np.ascontiguousarray(bump_force, dtype=float),
+                             np.ascontiguousarray(load_ratio, dtype=float),
+                             np.ascontiguousarray(in_contact, dtype=np.bool_),
+                             np.ascontiguousarray(noise, dtype=float), *self.arrays())
+        if kind:
+            self.slip_events.append((self.time, self.friction_estimate, SLIP_KINDS[kind]))
 
     def step(self, phase: GraspPhase) -> float:
         """One control step in ``phase`` -> grasp-force command [N]."""
@@ -281,6 +289,10 @@ def law_parameters(parameters: IncipientSlipParameters, centres) -> np.ndarray:
                         (P_FORCE_SHARE, parameters.force_share), (P_RELEASE_RATE, parameters.release_rate),
                         (P_ROTATIONAL, float(parameters.rotational_slip_detection)),
                         (P_NOISE_MARGIN, NOISE_MARGIN), (P_FULL_SEARCH_EVERY, FULL_SEARCH_EVERY),
-                        (P_WARM_STEP, 0.1 * reach)):
+                        (P_WARM_STEP, 0.1 * reach), (P_REACH, max(reach, 1.0)),
+                        (P_SCALE_GAIN, 1.0 - math.exp(-1.0 / (SCALE_TIME * parameters.frame_rate_hz))),
+                        (P_STALL_RISE, STALL_RISE), (P_STALL_FRACTION, STALL_FRACTION),
+                        (P_GROSS_FRAMES, min(max(round(GROSS_WINDOW * parameters.frame_rate_hz), 2),
+                                             parameters.watch_frames))):
         values[slot] = value
     return values
