@@ -184,7 +184,7 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
         if column_cache is not None:
             disk_key = compliance_cache_key(model, scene.material.E, scene.material.nu, candidates, components,
                                             prepared.half)
-            stored = column_cache.load(disk_key)
+            stored = column_cache.load(disk_key, compliance.size)
             if stored is not None:
                 compliance.preload(*stored)
         prepared.compliances[compliance_key] = compliance
@@ -274,8 +274,11 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
                                                    prepared.half)
             try:
                 column_cache.save(key, *compliance.stored())
-            except OSError as error:                 # a full or read-only cache folder must not lose the result
+            except OSError as error:                 # a full cache folder must not lose the result
                 import warnings
 
-                warnings.warn(f"compliance columns not cached ({error})", stacklevel=2)
+                from fem.cache_dir import CacheWarning
+
+                warnings.warn(f"compliance columns not cached in {str(column_cache.directory)!r} "
+                              f"({error.strerror or error})", CacheWarning, stacklevel=2)
     return result
