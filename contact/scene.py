@@ -425,18 +425,29 @@ def _scene(name, loads, parts) -> Scene:
         raise InputErrors([str(error)]) from None
 
 
+MAX_TOML_BYTES = 4 * 2**20    # a scene, sweep or design file is a few kB; more is not one (or is /dev/zero)
+
+
 def read_toml_file(path: str | Path, what: str) -> dict:
-    """The parsed TOML document of ``path``; a missing file, a folder, a file that is not UTF-8 text or not TOML
-    raises an error (FileNotFoundError, IsADirectoryError, ValueError) naming ``what`` and the file."""
+    """The parsed TOML document of ``path``; a missing file, a folder, anything but a regular file (a named pipe, a
+    device such as /dev/zero: refused before opening, so nothing hangs), a file over MAX_TOML_BYTES, a file that is
+    not UTF-8 text or not TOML raises an error (FileNotFoundError, IsADirectoryError, ValueError) naming ``what``
+    and the file."""
     path = Path(path)
     if path.is_dir():
         raise IsADirectoryError(f"{what} {str(path)!r} is a folder, not a TOML file")
     if not path.exists():
         raise FileNotFoundError(f"{what} {str(path)!r} does not exist")
+    if not path.is_file():
+        raise ValueError(f"{what} {str(path)!r} is not a regular file (a named pipe, a socket or a device): give a "
+                         f"TOML file")
     try:
-        raw = path.read_bytes()
+        with path.open("rb") as stream:
+            raw = stream.read(MAX_TOML_BYTES + 1)
     except OSError as error:
         raise OSError(f"{what} {str(path)!r} cannot be read: {error.strerror or error}") from None
+    if len(raw) > MAX_TOML_BYTES:
+        raise ValueError(f"{what} {str(path)!r} is larger than {MAX_TOML_BYTES // 2**20} MiB: not a TOML input file")
     if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
         raise ValueError(f"{what} {str(path)!r} is UTF-16 text: save it as UTF-8 (TOML files are UTF-8)")
     try:
