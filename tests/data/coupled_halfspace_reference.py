@@ -1,7 +1,7 @@
 """An independent computation of the coupled frictional half-space reference that tests/test_halfspace.py checks
 ``contact.halfspace`` against: ``python tests/data/coupled_halfspace_reference.py`` rewrites
 ``coupled_halfspace_reference.json`` beside it (3.3 CPU minutes; ``--spacing 0.053`` for the a/20 grid of
-docs/coupled_reference.md, about an hour).
+docs/coupled_reference.md, not timed here: 4x the cells).
 
 What is shared with ``contact.halfspace`` is only the problem: a rigid sphere (R = 10 mm) pressed into an elastic
 half-space (E = 1 MPa, nu, mu = 0.5) to P = 0.2 N (in 16 equal force steps with friction on, or in one without),
