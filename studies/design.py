@@ -1,6 +1,6 @@
 """Fingertip design sweep (FEM -> sensor -> estimator, resumable, on dask): python -m studies design FILE --out DIR.
 
-The design file lists fingertip designs and the study they go through (format: controller/_design_file.py; example:
+The design file lists fingertip designs and the study they go through (format: controller/design/_file.py; example:
 studies/designs/array_size_and_stiffness.toml); ``controller.design.design_sweep`` does the work. Writes
 DIR/cases/<id>.json as each design finishes, DIR/design.parquet and DIR/design.csv (one typed row per design: its
 parameters, every metric, status, timings), DIR/design_increments.parquet (one row per design, path and increment)
