@@ -17,16 +17,19 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Iterable
 
 from contact import limits
 from contact.limits import PhysicalLimitError, estimate_resources, fine_zone
 from contact.scene import Scene
 from fem.validation import check_bool, check_integer, check_range
 
-__all__ = ["DEFAULT_MAX_HOURS", "MAX_CASES", "Task", "scene_cost", "check_budget", "check_case_count"]
+__all__ = ["DEFAULT_MAX_HOURS", "MAX_CASES", "SAMPLE", "Task", "scene_cost", "sampled", "check_budget",
+           "check_case_count"]
 
 DEFAULT_MAX_HOURS = 12.0          # h: an overnight run; longer plans need --max-hours or --force
 MAX_CASES = 100_000               # cases or designs in one file: each is built and checked before any solve
+SAMPLE = 200                      # a plan of more tasks is estimated from this many, evenly spaced (each ~20 ms)
 PREPARE_REFERENCE = (27.1e3, 4.0)         # (DOF, s): mesh + assembly + factorization of a block (see above)
 GMSH_FACTOR = 3.0                         # a cap or an array: meshing by gmsh on top
 INCREMENT_SECONDS_PER_ROOT_POINT = 0.05   # s per increment per sqrt(candidate surface points)
@@ -56,6 +59,15 @@ def scene_cost(scene: Scene, increments: int | None = None, prepare: bool = True
     return {"dofs": dofs, "bytes": estimate["bytes"], "seconds": seconds}
 
 
+def sampled(groups: list) -> tuple[list, float]:
+    """At most SAMPLE of ``groups``, evenly spaced, and the factor that scales their time to all of them: a plan
+    of 8000 designs is estimated in seconds. Each solve still checks its own memory before meshing
+    (``contact.limits.check_resources``), so an outlier between the samples is refused when it comes."""
+    step = max(1, -(-len(groups) // SAMPLE))
+    chosen = groups[::step]
+    return chosen, len(groups) / max(len(chosen), 1)
+
+
 def check_case_count(count: int, what: str = "cases") -> None:
     """Refuse a file that asks for more than MAX_CASES cases (each is built and checked before any solve)."""
     if count > MAX_CASES:
@@ -63,33 +75,42 @@ def check_case_count(count: int, what: str = "cases") -> None:
                                  f"several files")
 
 
-def check_budget(tasks: list[Task], workers: int, max_hours: float = DEFAULT_MAX_HOURS, force: bool = False,
-                 what: str = "the plan") -> dict:
+def check_budget(tasks: Iterable[Task], workers: int, max_hours: float = DEFAULT_MAX_HOURS, force: bool = False,
+                 what: str = "the plan", count: int | None = None, total: int | None = None) -> dict:
     """Refuse (PhysicalLimitError, a ValueError) a plan whose largest task needs more memory than this machine has
     per worker, or whose estimated wall time on ``workers`` exceeds ``max_hours``; ``force`` skips both refusals.
-    Returns the estimate: tasks, peak bytes per worker, hours."""
+    ``tasks`` may be a generator (``count`` of them, standing for ``total`` when ``sampled``): the estimate stops at
+    the first task past a limit, so a plan of thousands is refused in seconds. Returns the estimate: tasks, peak
+    bytes per worker, hours."""
     check_integer("workers", workers, 1, 100_000)
     check_range("max_hours", max_hours, 0.0, math.inf, "h", low_open=True, high_open=True)
     check_bool("force", force)
-    peak = max((task.bytes for task in tasks), default=0.0)
-    hours = sum(task.seconds for task in tasks) / workers / 3600.0
-    estimate = {"tasks": len(tasks), "bytes": peak, "hours": hours}
-    if force or not tasks:
-        return estimate
-    largest = max(tasks, key=lambda task: task.bytes)
-    total, free = limits.machine_memory(), limits.available_memory()
-    problems = []
-    if total is not None and largest.bytes * min(workers, len(tasks)) > total:
-        problems.append(f"{largest.label} needs about {largest.bytes / 1e9:.3g} GB (x {min(workers, len(tasks))} "
-                        f"worker(s) at once); this machine has {total / 1e9:.3g} GB in all: coarser settings or "
-                        f"fewer workers")
-    if hours > max_hours:
-        problems.append(f"{what} would take about {hours:.3g} h on {workers} worker(s) ({len(tasks)} task(s); an "
-                        f"upper estimate), past the limit of {max_hours:g} h: fewer cases, coarser settings or more "
-                        f"workers, or raise --max-hours")
-    if problems:
-        raise PhysicalLimitError("\n".join(problems + ["--force runs it anyway"]))
-    if free is not None and largest.bytes * min(workers, len(tasks)) > free:
+    machine, free = limits.machine_memory(), limits.available_memory()
+    seen, seconds, largest = 0, 0.0, None
+    for task in tasks:
+        seen += 1
+        seconds += task.seconds
+        if largest is None or task.bytes > largest.bytes:
+            largest = task
+        at_once = min(workers, count or seen)
+        if force:
+            continue
+        if machine is not None and task.bytes * at_once > machine:
+            raise PhysicalLimitError(f"{task.label} needs about {task.bytes / 1e9:.3g} GB (x {at_once} worker(s) at "
+                                     f"once); this machine has {machine / 1e9:.3g} GB in all: coarser settings or "
+                                     f"fewer workers\n--force runs it anyway")
+        hours = seconds / workers / 3600.0
+        if hours > max_hours:
+            stopped = bool(count and seen < count)
+            basis = f"{seen} of {count} task(s)" if stopped else f"{seen} task(s)"
+            if total and count and total > count:
+                basis += f" standing for {total}"
+            raise PhysicalLimitError(f"{what} would take {'more than' if stopped else 'about'} {hours:.3g} h on "
+                                     f"{workers} worker(s) (an upper estimate over {basis}), "
+                                     f"past the limit of {max_hours:g} h: fewer cases, coarser settings or more "
+                                     f"workers, or raise --max-hours\n--force runs it anyway")
+    estimate = {"tasks": seen, "bytes": largest.bytes if largest else 0.0, "hours": seconds / workers / 3600.0}
+    if not force and largest is not None and free is not None and largest.bytes * min(workers, seen) > free:
         import warnings
 
         from contact.limits import PhysicalLimitWarning

@@ -112,16 +112,20 @@ def check_sweep_budget(cases, slots: int, max_hours: float, force: bool, share: 
     """Refuse (contact.budget) pending cases that cannot fit or would run past ``max_hours`` on ``slots`` workers:
     one task per group of cases sharing a preparation (as ``plan_tasks`` runs them)."""
     from contact import preparation_key
-    from contact.budget import Task, check_budget, scene_cost
+    from contact.budget import Task, check_budget, sampled, scene_cost
 
     groups: dict = {}
     for case in cases:
         groups.setdefault(preparation_key(case.scene) if share else case.case_id, []).append(case)
-    tasks = []
-    for members in groups.values():
-        cost = scene_cost(members[0].scene, increments=sum(case.n_increments for case in members))
-        tasks.append(Task(f"case {dict(members[0].parameters)}", cost["bytes"], cost["seconds"]))
-    return check_budget(tasks, slots, max_hours, force, f"{len(cases)} case(s)")
+    chosen, scale = sampled(list(groups.values()))          # past SAMPLE groups, evenly spaced ones stand for all
+
+    def tasks():
+        for members in chosen:
+            cost = scene_cost(members[0].scene, increments=sum(case.n_increments for case in members))
+            yield Task(f"case {dict(members[0].parameters)}", cost["bytes"], scale * cost["seconds"])
+
+    return check_budget(tasks(), slots, max_hours, force, f"{len(cases)} case(s)", count=len(chosen),
+                        total=len(groups))
 
 
 def _payload(case) -> tuple:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 
-from contact.budget import DEFAULT_MAX_HOURS, Task, check_budget, scene_cost
+from contact.budget import DEFAULT_MAX_HOURS, SAMPLE, Task, check_budget, sampled, scene_cost
 
 from ._spec import DesignStudy, FingertipDesign, design_scenes, fem_key
 
@@ -37,13 +37,12 @@ def _sensor_cost(design: FingertipDesign, study: DesignStudy) -> tuple[float, fl
     return memory, seconds
 
 
-def design_tasks(designs: list[FingertipDesign], study: DesignStudy) -> list[Task]:
-    """One Task per FEM solution (designs that differ only in their sensor share it), with its designs' sensors."""
-    groups: dict = {}
-    for design in designs:
-        groups.setdefault(fem_key(design), []).append(design)
-    tasks = []
-    for members in groups.values():
+def design_tasks(designs: list[FingertipDesign], study: DesignStudy):
+    """One Task per FEM solution (designs that differ only in their sensor share it), with its designs' sensors;
+    a generator (the budget stops at the first task past a limit). Past SAMPLE solutions, evenly spaced ones stand
+    for the rest (``contact.budget.sampled``: their times scaled up)."""
+    chosen, scale = sampled(list(_groups(designs).values()))
+    for members in chosen:
         shear, twist = design_scenes(members[0], study)
         cost = scene_cost(shear)
         memory, seconds = cost["bytes"], cost["seconds"]
@@ -56,11 +55,19 @@ def design_tasks(designs: list[FingertipDesign], study: DesignStudy) -> list[Tas
         first = members[0]
         label = (f"the design {first.rows}x{first.cols}, bump radius {first.bump_radius:g} mm, base "
                  f"{first.base_width:g} x {first.base_depth:g} mm, sensor pitch {first.sensor_pitch:g} mm")
-        tasks.append(Task(label, memory, seconds if math.isfinite(seconds) else math.inf))
-    return tasks
+        yield Task(label, memory, scale * seconds if math.isfinite(seconds) else math.inf)
+
+
+def _groups(designs: list[FingertipDesign]) -> dict:
+    groups: dict = {}
+    for design in designs:
+        groups.setdefault(fem_key(design), []).append(design)
+    return groups
 
 
 def check_design_resources(designs: list[FingertipDesign], study: DesignStudy, workers: int, force: bool = False,
                            max_hours: float = DEFAULT_MAX_HOURS) -> dict:
     """Refuse a design sweep that cannot fit or would run past ``max_hours`` on ``workers`` (unless ``force``)."""
-    return check_budget(design_tasks(designs, study), workers, max_hours, force, f"the sweep of {len(designs)} designs")
+    solutions = len(_groups(designs))
+    return check_budget(design_tasks(designs, study), workers, max_hours, force,
+                        f"the sweep of {len(designs)} designs", count=min(solutions, SAMPLE), total=solutions)
