@@ -30,7 +30,7 @@ def add_runner_arguments(parser) -> None:
     parser.add_argument("--connect-timeout", type=float, default=5.0, help="seconds to reach --scheduler (default 5)")
     parser.add_argument("--retry-failed", action="store_true", help="run the cases recorded as failed again")
     parser.add_argument("--max-hours", type=float, default=12.0,
-                        help="refuse a run whose estimated wall time exceeds this (default 12 h; an upper estimate)")
+                        help="refuse a run whose estimated wall time exceeds this (default 12 h; contact.budget)")
     parser.add_argument("--force", action="store_true",
                         help="run past the resource limits: the memory of one case and --max-hours")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
