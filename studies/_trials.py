@@ -3,6 +3,10 @@
 A trial is known by a key made of its object, its settings and a hash of the closed loop's sources (``trial_key``): a
 re-run with the same jobs reads the rows already in ``NAME_trials.csv`` and runs only the missing ones; after an edit
 of the controller or the fingertip model, or with other settings, every trial runs again. Rows are kept in job order.
+
+Every row carries ``row_check``, a digest of its own values: a row read back whose digest does not match (a
+truncated line, an edited or bit-flipped value, a row of another shape) is skipped with one warning naming the file,
+and its trial runs again; a file that is not CSV text at all is reported the same way and rebuilt.
 """
 
 from __future__ import annotations
@@ -11,6 +15,7 @@ import csv
 import functools
 import hashlib
 import json
+import warnings
 from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
@@ -49,11 +54,38 @@ def trial_key(obj, settings, extra: str = "") -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
+CHECK = "row_check"
+
+
+def row_check(row: dict) -> str:
+    """Digest (16 hex digits) of a row's values as the CSV holds them (None and "" alike), ``row_check`` left out."""
+    items = sorted((name, "" if value is None else str(value)) for name, value in row.items() if name != CHECK)
+    text = "\x1f".join(f"{name}\x1e{value}" for name, value in items if value != "")
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
 def _read(path: Path) -> dict[str, dict]:
+    """The rows of an earlier run by key; rows that fail their ``row_check`` are skipped, with one TrialRowWarning
+    naming the file (and the whole file when it is not CSV text)."""
     if not path.is_file():
         return {}
-    with path.open(newline="") as stream:
-        return {row["key"]: row for row in csv.DictReader(stream) if row.get("key")}
+    try:
+        with path.open(newline="", encoding="utf-8") as stream:
+            rows = list(csv.DictReader(stream))
+    except (UnicodeDecodeError, csv.Error, OSError) as error:
+        warnings.warn(f"trial table {str(path)!r} cannot be read ({type(error).__name__}: {error}): its trials run "
+                      f"again and the file is rebuilt", TrialRowWarning, stacklevel=3)
+        return {}
+    valid = {row["key"]: row for row in rows
+             if None not in row and None not in row.values() and row.get("key") and row.get(CHECK) == row_check(row)}
+    if len(valid) < len(rows):
+        warnings.warn(f"trial table {str(path)!r}: {len(rows) - len(valid)} of {len(rows)} row(s) damaged (truncated, "
+                      f"edited or of another shape): skipped, their trials run again", TrialRowWarning, stacklevel=3)
+    return valid
+
+
+class TrialRowWarning(UserWarning):
+    """Rows of a trial table that do not read back as written are skipped (and their trials run again)."""
 
 
 def run_trial_table(path: Path, jobs: list[tuple[str, object, object, dict]], row: Callable[[object, dict], dict],
@@ -68,9 +100,9 @@ def run_trial_table(path: Path, jobs: list[tuple[str, object, object, dict]], ro
     """
     from controller.closed_loop import map_trials, run_trial
 
-    done = _read(path)
     keys = [job[0] for job in jobs]
-    rows = {key: coerce(done[key]) for key in keys if key in done}
+    written = {key: row for key, row in _read(path).items() if key in set(keys)}   # as on disk: their checks hold
+    rows = {key: coerce(value) for key, value in written.items()}
     missing = [job for job in jobs if job[0] not in rows]
     if missing:
         results = map_trials(functools.partial(_with_required_force, function or run_trial),
@@ -78,7 +110,9 @@ def run_trial_table(path: Path, jobs: list[tuple[str, object, object, dict]], ro
         for index, (result, required) in results:
             key, _, _, info = missing[index]
             rows[key] = {"key": key, **row(result, {**info, "required": required})}
-            write_csv_atomic(path, [rows[k] for k in keys if k in rows])     # after every trial: nothing is lost
+            rows[key][CHECK] = row_check(rows[key])
+            written[key] = rows[key]
+            write_csv_atomic(path, [written[k] for k in keys if k in written])     # after every trial: nothing lost
     return [rows[key] for key in keys]
 
 
@@ -96,7 +130,7 @@ def coerce(row: dict) -> dict:
     """Numbers and booleans back from a CSV row's strings (values computed in this run pass unchanged)."""
     out = {}
     for name, value in row.items():
-        if not isinstance(value, str) or name == "key":
+        if not isinstance(value, str) or name in ("key", CHECK):
             out[name] = value
         elif value in ("True", "False"):
             out[name] = value == "True"

@@ -197,6 +197,8 @@ def is_up_to_date(out_dir: Path, name: str, module, quick: bool) -> bool:
         stamp = json.loads(stamp_path(out_dir, name).read_text())
     except (OSError, ValueError):
         return False
+    if not isinstance(stamp, dict) or not isinstance(stamp.get("outputs", ()), (list, tuple)):
+        return False                                  # a stamp of another shape: run the study again
     return (stamp.get("hash") == source_hash(module, quick)
             and all((Path(out_dir) / output).is_file() for output in stamp.get("outputs", ()))
             and read_summary(out_dir, name).get("status") == "ok")
@@ -205,9 +207,10 @@ def is_up_to_date(out_dir: Path, name: str, module, quick: bool) -> bool:
 def read_summary(out_dir: Path, name: str) -> dict:
     """The record ``NAME.summary.json`` (empty dict if missing or unreadable)."""
     try:
-        return json.loads((Path(out_dir) / f"{name}.summary.json").read_text())
+        summary = json.loads((Path(out_dir) / f"{name}.summary.json").read_text())
     except (OSError, ValueError):
         return {}
+    return summary if isinstance(summary, dict) else {}
 
 
 def run_study(name: str, module_name: str, out_dir: str, quick: bool, digest: str) -> dict:

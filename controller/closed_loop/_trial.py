@@ -12,7 +12,7 @@ import numpy as np
 from contact.reduced import ReducedFingertip
 from controller.control.acceleration_control import AccelerationControlParameters, ForceFeedback
 from controller.plant.fingertip_plant import PlantFactors, SensorPlane
-from fem.validation import check_positive, check_range
+from fem.validation import check_integer, check_positive, check_range
 
 GRAVITY = 9.81                      # m/s^2
 MM_PER_M = 1000.0
@@ -173,6 +173,7 @@ class TrialSettings:
         if self.constant_force is not None:
             check_positive("constant_force", self.constant_force, "N")
         check_range("hold_time", self.hold_time, 0.0, 600.0, "s")
+        check_integer("seed", self.seed, 0, 2**63 - 1)               # a generator seed: 1.5 or True is no seed
         for name in ("rotational_slip_detection", "place", "implicit_coupling"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name}={getattr(self, name)!r} must be True or False")

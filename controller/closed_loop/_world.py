@@ -358,5 +358,10 @@ def _controller(settings: TrialSettings, parameters, sensing: SensingChain):
 
 
 def run_trial(obj: GraspObject, settings: TrialSettings | None = None, **options) -> TrialResult:
-    """Build the world for one trial and run it (``GraspWorld``'s options: ``plant``, ``controller_parameters``)."""
+    """Build the world for one trial and run it (``GraspWorld``'s options: ``plant``, ``controller_parameters``;
+    TypeError naming the argument for anything but a GraspObject and a TrialSettings or None)."""
+    if not isinstance(obj, GraspObject):
+        raise TypeError(f"obj={obj!r} is a {type(obj).__name__}, not a GraspObject (e.g. TABLE_I_OBJECTS['eclair'])")
+    if settings is not None and not isinstance(settings, TrialSettings):
+        raise TypeError(f"settings={settings!r} is a {type(settings).__name__}, not a TrialSettings (or None)")
     return GraspWorld(obj, settings, **options).run()
