@@ -15,6 +15,7 @@ from __future__ import annotations
 import hashlib
 import json
 import time
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -130,9 +131,11 @@ def fit_fingertip(design: ArrayFingertipDesign, plan: FitPlan = FitPlan(), cache
     return fitted
 
 
-def _solve(scenes: dict, design, log) -> tuple[dict, dict, dict, object]:
+def _solve(scenes: dict, design, log, limits: dict) -> tuple[dict, dict, dict, object]:
     """Every path on one prepared mesh: {name: (PathSamples, states (t, k, 4), fields (t, k, n))}, timings, mesh
-    facts and the first result (its sensor-plane mesh)."""
+    facts and the first result (its sensor-plane mesh); ``limits`` collects the solver's physical-limit warnings
+    {message: first path} (the closed loop's 2.7 N per bump strains the gel past 10 %, as the packaged fit did)."""
+    from contact.limits import PhysicalLimitWarning
     from contact.solver import prepare, solve_scene
 
     from ._samples import PathSamples
@@ -144,7 +147,14 @@ def _solve(scenes: dict, design, log) -> tuple[dict, dict, dict, object]:
     paths, first = {}, None
     for name, (_, scene) in scenes.items():
         tic = time.perf_counter()
-        result = solve_scene(scene, prepared)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", PhysicalLimitWarning)
+            result = solve_scene(scene, prepared)
+        for warning in caught:                 # kept with the fit (``limits``), others passed on
+            if issubclass(warning.category, PhysicalLimitWarning):
+                limits.setdefault(str(warning.message).split(": ", 1)[-1], name)
+            else:
+                warnings.warn_explicit(warning.message, warning.category, warning.filename, warning.lineno)
         fields = bump_base_pressures(result, prepared.factorization)
         total = np.stack([increment.base_pressure for increment in result.increments])
         # superposition: the bumps' own fields add up to each increment's base pressure (the gel is linear)
@@ -164,7 +174,8 @@ def _fit(design: ArrayFingertipDesign, plan: FitPlan, key: str, log) -> FittedFi
 
     start = time.perf_counter()
     scenes = fit_scenes(design, plan)
-    paths, timings, mesh, first = _solve(scenes, design, log)
+    limits: dict = {}
+    paths, timings, mesh, first = _solve(scenes, design, log, limits)
     timings["fem"] = time.perf_counter() - start
     tic = time.perf_counter()
     roles = {name: case.role for name, (case, _) in scenes.items()}
@@ -191,7 +202,7 @@ def _fit(design: ArrayFingertipDesign, plan: FitPlan, key: str, log) -> FittedFi
     timings["held_out"] = time.perf_counter() - tic
     timings["total"] = time.perf_counter() - start
     response.provenance.update(parameters=calibration.parameters.to_dict(), errors=errors, timings=timings,
-                               fits=[fit.to_dict() for fit in calibration.fits])
+                               fits=[fit.to_dict() for fit in calibration.fits], physical_limits=limits)
     return FittedFingertip(design, calibration.parameters, response, errors, timings, provenance["mesh"], plan, key)
 
 

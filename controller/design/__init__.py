@@ -15,16 +15,21 @@ capacity per unit grasp force, and the mesh's error estimate.
 this process, resumable: with ``out_dir`` each design's record is written as it finishes and a re-run skips the
 designs recorded there (``fem.task_runner``). Designs that differ only in their sensor share one FEM solve (one
 task); designs of one geometry share its cached mesh, and a re-run reads the compliance columns from their disk cache.
+With ``DesignStudy(closed_loop=True)`` each design is also judged by its grasp (``_grasp``): calibrated on its own
+FEM (``contact.reduced.design_fit``, shared by the designs of one mechanical design), its plant and its estimator's
+bench built, Table I trials run; the closed-loop columns (``GRASP_METRICS``, ``FIT_METRICS``) join the row.
 ``python -m studies design DESIGN.toml`` is the command (file format: ``controller.design._file``).
 """
 
 from ._evaluate import design_record, evaluate_designs
 from ._file import DesignSweepSpec, load_design_file
+from ._grasp import FIT_METRICS, GRASP_METRICS, array_design, grasp_refusal, wilson_interval
 from ._metrics import METRICS
 from ._spec import DesignStudy, FingertipDesign, SensorModel, design_id, design_scenes, fem_key, twist_angles
 from ._sweep import design_sweep
-from ._table import DESIGN_COLUMNS, design_table, increment_table, pareto_front
+from ._table import CLOSED_LOOP_COLUMNS, DESIGN_COLUMNS, design_table, increment_table, pareto_front
 
 __all__ = ["FingertipDesign", "DesignStudy", "SensorModel", "METRICS", "design_scenes", "twist_angles",
            "evaluate_designs", "design_sweep", "design_table", "increment_table", "pareto_front", "design_id",
-           "load_design_file", "DesignSweepSpec", "DESIGN_COLUMNS"]
+           "load_design_file", "DesignSweepSpec", "DESIGN_COLUMNS", "GRASP_METRICS", "FIT_METRICS",
+           "CLOSED_LOOP_COLUMNS", "grasp_refusal", "array_design", "wilson_interval"]
