@@ -46,6 +46,8 @@ GRASP_METRICS = {
     "grip_over_slip_limit": ("mean settled grip over the trial's own slip limit (its build's bump laws), held "
                              "trials", "-", "lower", "Float64"),
     "grip_over_slip_limit_max": ("largest settled grip over slip limit, held trials", "-", None, "Float64"),
+    "grip_over_slip_limit_sd": ("standard deviation (ddof 1) of the settled grip over slip limit over the held "
+                                "trials (two or more)", "-", None, "Float64"),
     "friction_estimate_error": ("median |mu_hat / mu - 1| over the trials with a friction estimate", "-", "lower",
                                 "Float64"),
     "gross_slips": ("trials whose grasp slid as a whole (every bump of both fingertips sliding) in lift or hold",
@@ -187,6 +189,7 @@ def grasp_metrics(design, study, fitted) -> tuple[dict, dict]:
                "grasp_crushed": outcomes.count("crushed"),
                "grip_over_slip_limit": float(np.mean(ratios)) if ratios else None,
                "grip_over_slip_limit_max": float(np.max(ratios)) if ratios else None,
+               "grip_over_slip_limit_sd": float(np.std(ratios, ddof=1)) if len(ratios) > 1 else None,
                "friction_estimate_error": float(np.median(errors)) if errors else None,
                "gross_slips": gross, "gross_slips_detected_before": int(sum(lead > 0.0 for lead in leads)),
                "detection_lead_time": float(np.median(leads)) if leads else None}
