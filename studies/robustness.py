@@ -30,6 +30,7 @@ COMBINED_SPREADS = (0.1, 0.2)
 TRIALS, FULL_TRIALS = 4, 30
 TARGET_HELD = 29 / 30                 # the issue's target: >= 29 of 30 per object for each factor up to +-15 %
 TARGET_LEVEL = 0.15
+FRICTION_BANDS = ((0.2, 0.3), (0.3, 0.4), (0.4, 0.5), (0.5, 1.2 + 1e-9))   # the prior (0.4) is a band edge
 
 
 def add_arguments(parser) -> None:
@@ -88,7 +89,7 @@ def run(out_dir, quick: bool = False, trials: int | None = None, full: bool = Fa
     rows = run_trial_table(out_dir / f"{NAME}.csv", jobs, _row, processes, label=NAME)
     summary = summarise(rows)
     write_csv_atomic(out_dir / f"{NAME}_summary.csv", summary)
-    verdict = _verdict(summary, trials)
+    verdict = _verdict(summary, rows, trials)
     for line in verdict["lines"]:
         print(f"{NAME}: {line}")
     save_figure(_plot(summary, rows, trials), out_dir, NAME)
@@ -128,7 +129,7 @@ def summarise(rows) -> list[dict]:
     return out
 
 
-def _verdict(summary, trials: int) -> dict:
+def _verdict(summary, rows, trials: int) -> dict:
     single = [row for row in summary if row["factor"] not in ("none", "all", "known world")]
     within = [row for row in single if abs(row["level"]) <= TARGET_LEVEL + 1e-9]
     worst = min(summary, key=lambda row: row["success_rate"])
@@ -139,11 +140,31 @@ def _verdict(summary, trials: int) -> dict:
                      f"{row['turned_out']}, dropped {row['dropped']}, crushed {row['crushed']} "
                      f"(infeasible {row['infeasible']})")
     met = all(row["held"] >= math.ceil(TARGET_HELD * row["trials"]) for row in within)
+    bands = friction_bands(rows)
+    for band in bands:
+        lines.append(f"friction {band['friction']}: held {band['held']}/{band['trials']} "
+                     f"({100 * band['success_low']:.0f}-{100 * band['success_high']:.0f} %) over every cell")
     lines.append(f"every single factor up to +-{100 * TARGET_LEVEL:.0f} %: "
                  f"{'met' if met else 'not met'} >= {TARGET_HELD * 30:.0f}/30 held per object "
                  f"({trials} trials per cell{'' if trials >= 30 else ': too few to decide'})")
     return dict(lines=lines, worst_failure_rate=1.0 - worst["success_rate"], worst_cell=worst["cell"],
-                worst_object=worst["object"], single_factor_target_met=bool(met), trials_per_cell=trials)
+                worst_object=worst["object"], single_factor_target_met=bool(met), trials_per_cell=trials,
+                friction_bands=bands)
+
+
+def friction_bands(rows) -> list[dict]:
+    """Held over every cell and object below, around and above the controller's prior friction (0.4)."""
+    from studies.table1 import wilson_interval
+
+    out = []
+    for low, high in FRICTION_BANDS:
+        mine = [row for row in rows if low <= row["friction_coefficient"] < high]
+        held = sum(row["outcome"] == "held" for row in mine)
+        if mine:
+            interval = wilson_interval(held, len(mine))
+            out.append(dict(friction=f"{low:g}-{high:g}", trials=len(mine), held=held, success_low=interval[0],
+                            success_high=interval[1]))
+    return out
 
 
 def _plot(summary, rows, trials: int):
@@ -178,14 +199,15 @@ def _plot(summary, rows, trials: int):
         for (i, j), label in text.items():
             axis.text(j, i, label, ha="center", va="center", fontsize=7)
         spreads = [row["level"] for row in summary if row["factor"] == "all" and row["object"] == name]
-        axis.set_yticks(range(len(factors) + 3), factors + [f"all +-{100 * s:.0f} %" for s in spreads[:2]]
-                        + [""] * (2 - len(spreads[:2])) + ["known world"], fontsize=8)
+        labels = (factors + [f"all +-{100 * s:.0f} %" for s in spreads[:2]] + [""] * (2 - len(spreads[:2]))
+                  + ["known world"])
+        axis.set_yticks(range(len(factors) + 3), labels if column == 0 else [""] * len(labels), fontsize=8)
         axis.set_xticks(range(len(levels)), [f"{100 * level:+.0f}" for level in levels], fontsize=8)
         axis.set_xlabel("plant factor's error [%]")
         axis.set_title(name.replace("_", " "), fontsize=10)
     fig.colorbar(shown, ax=fig.axes, shrink=0.5, label="held (success rate)")
     friction_axis = fig.add_subplot(grid[1, :2])
-    bins = np.linspace(0.2, 1.2, 6)
+    bins = np.linspace(0.2, 1.2, 11)
     for name in objects:
         mine = [row for row in rows if row["object"] == name]
         mu = np.array([row["friction_coefficient"] for row in mine])

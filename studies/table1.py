@@ -167,10 +167,10 @@ def _plot(rows, summary, plant: str):
         axes[0].text(i, 0.05, f"{entry['success']} held\n{entry['turned_out']} turned\n{entry['dropped']} dropped\n"
                               f"{entry['crushed']} crushed", ha="center", color="white", fontsize=8)
     axes[0].set_xticks(range(len(names)), [n.replace("_", "\n") for n in names])
-    axes[0].set_ylim(0, 1.1)
+    axes[0].set_ylim(0, 1.18)
     axes[0].set_ylabel("success rate")
     axes[0].set_title("(a) held: no table contact, no crush, not turned out", fontsize=10)
-    axes[0].legend(fontsize=8, loc="lower right")
+    axes[0].legend(fontsize=8, loc="upper right")
     for i, name in enumerate(names):
         mine = [row for row in rows if row["object"] == name]
         jitter = np.linspace(-0.2, 0.2, len(mine)) if len(mine) > 1 else np.zeros(1)

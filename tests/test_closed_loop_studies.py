@@ -88,9 +88,9 @@ def test_fig10_quick_counts_outcomes_apart(tmp_path):
 
 @pytest.mark.parametrize("trials", [0, 1.5, True])
 def test_closed_loop_studies_refuse_bad_trial_counts(tmp_path, trials):
-    from studies import fig10, fig11, table1
+    from studies import fig10, fig11, robustness, table1
 
-    for study in (table1, fig10, fig11):
+    for study in (table1, fig10, fig11, robustness):
         with pytest.raises(ValueError, match=f"trials={trials!r} must be an integer >= 1"):
             study.run(tmp_path, quick=True, trials=trials)
 
@@ -107,3 +107,31 @@ def test_batch_refuses_a_bad_process_count():
 
     with pytest.raises(ValueError, match="processes=0 must be an integer >= 1"):
         list(run_trials([(LIGHT_BOX, TrialSettings())], processes=0))
+
+
+def test_robustness_quick_counts_cells_and_friction_bands(tmp_path, monkeypatch):
+    # two cells (the nominal build and the known world), one trial per object: the summary and the friction bands must
+    # count the rows on disk, and four trials per cell cannot decide the 29/30 target
+    from studies import robustness
+    from studies._report import NOT_REPRODUCED, PARTLY, REPRODUCED, _rule_robustness
+
+    every = robustness.cells(full=False, quick=True)
+    assert {cell["cell"] for cell in every} >= {"nominal", "known_world", "all+-0.20"}
+    monkeypatch.setattr(robustness, "cells", lambda full, quick: [every[0], every[-1]])
+    summary = robustness.run(tmp_path, quick=True, trials=1, processes=1)
+    rows = _rows(tmp_path / "robustness.csv")
+    assert len(rows) == 6 and {row["cell"] for row in rows} == {"nominal", "known_world"}
+    cells = _rows(tmp_path / "robustness_summary.csv")
+    assert sum(int(cell["trials"]) for cell in cells) == 6
+    assert sum(int(cell["held"]) for cell in cells) == sum(row["outcome"] == "held" for row in rows)
+    bands = summary["friction_bands"]
+    assert sum(band["trials"] for band in bands) == 6                   # the bands partition 0.2-1.2
+    assert sum(band["held"] for band in bands) == sum(row["outcome"] == "held" for row in rows)
+    failure = 1.0 - min(float(cell["success_rate"]) for cell in cells)
+    assert summary["max_error"] == pytest.approx(failure)
+    verdict, reason = _rule_robustness(summary, rows)
+    assert verdict in (PARTLY, NOT_REPRODUCED) and "too few to decide" in reason
+    met = dict(trials_per_cell=30, single_factor_target_met=True, max_error=0.0, worst_cell="nominal",
+               worst_object="eclair", friction_bands=[])
+    assert _rule_robustness(met, [])[0] == REPRODUCED
+    assert _rule_robustness({**met, "single_factor_target_met": False, "max_error": 0.5}, [])[0] == NOT_REPRODUCED

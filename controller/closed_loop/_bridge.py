@@ -68,6 +68,7 @@ class ContactBridge:
         config[K.C_USE_DOB] = 1.0
         config[K.C_IMPLICIT] = 1.0 if implicit else 0.0
         config[K.C_ANISOTROPY] = friction_anisotropy
+        config[K.C_MAX_DEPTH] = tip.design.bump_radius
         config[K.C_SUBSTEPS], config[K.C_STEP] = round(substeps), float(model.opt.timestep)
         config[[K.C_HALF_X, K.C_HALF_Y, K.C_HALF_Z]] = 0.5 * np.asarray(obj.size) * MM_PER_M
         config[[K.C_OBJECT_BODY, K.C_ARM_BODY]] = self.object_id, self.arm_id

@@ -45,7 +45,7 @@ MM = 1000.0                        # mm per m
  C_OBJECT_MASS, C_INERTIA_X, C_INERTIA_Y, C_INERTIA_Z, C_FINGER_MASS, C_FINGER_DAMPING, C_FINGER_OFFSET,
  C_ARM_RADIUS, C_NOMINAL_INERTIA, C_TARGET_INERTIA, C_TARGET_DAMPING, C_TORQUE_LIMIT, C_DOB_GAIN, C_USE_DOB,
  C_SUBSTEPS, C_STEP, C_HALF_X, C_HALF_Y, C_HALF_Z, C_OBJECT_BODY, C_ARM_BODY, C_OBJECT_DOF, C_ARM_DOF,
- C_IMPLICIT, C_ANISOTROPY, C_FORCE_OBSERVER, C_SIZE) = range(33)
+ C_IMPLICIT, C_ANISOTROPY, C_FORCE_OBSERVER, C_MAX_DEPTH, C_SIZE) = range(34)
 # --- per-bump geometry rows (2 k, 15): tip offset from the finger origin (world, mm), x_s, y_s, z_s, face sign, -----
 G_OFFSET, G_X, G_Y, G_Z, G_FACE, G_SIZE = 0, 3, 6, 9, 12, 13
 # --- per-bump state rows (2 k, 6): anchor (object frame, mm), anchor angle [rad], touching at the last step (0/1),
@@ -131,7 +131,10 @@ def _normal_forces(config, geometry, bumps, arm, closing_mm, closing_rate_mm, po
         offset_y = arm[1] + side * (config[C_FINGER_OFFSET] - closing_mm) + geometry[i, G_OFFSET + 1] - position[1]
         face = geometry[i, G_FACE]
         depth = half_y + face * (fixed[i, 4] + rotation[1, 1] * offset_y + fixed[i, 5])       # R^T offset, y
-        if not (depth > 0.0 and abs(fixed[i, 2] + rotation[1, 0] * offset_y + fixed[i, 3]) <= half_x
+        # a tip deeper than the bump's own radius has nothing left to compress: the object is not in front of the
+        # face but met the fingertip edge-on (an object slid out of the grasp); no contact the bump law describes
+        if not (0.0 < depth <= config[C_MAX_DEPTH]
+                and abs(fixed[i, 2] + rotation[1, 0] * offset_y + fixed[i, 3]) <= half_x
                 and abs(fixed[i, 6] + rotation[1, 2] * offset_y + fixed[i, 7]) <= half_z):
             bumps[i, B_DEPTH] = 0.0
             forces[i] = 0.0

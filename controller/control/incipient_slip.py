@@ -20,7 +20,8 @@ never below the minimum contact force F_min.
 
 Friction estimate: probe and watch. Before any slip was seen mu_hat is ``prior_friction``, the lowest friction the
 gripper is designed for, with a wider margin (``lift_safety_fraction``: the load grows in the lift faster than the
-grip follows). In HOLD the reference generator probes: it raises mu_hat by ``probe_rate`` per second (the grip falls
+grip follows). From ``probe_delay`` after the lift's start (through the rest of the lift and the hold) the law
+probes: it raises mu_hat by ``probe_rate`` per second (the grip falls
 the same way) while it watches how each loaded bump's load ratio answers its falling normal force over the last
 ``watch_frames`` frames. A stuck bump keeps its load (equilibrium fixes it; its share moves with its stiffness,
 ~ P_i^(1/3), when the normal forces redistribute), so its ratio rises at least like P_i^-(2/3); a bump on its
@@ -92,7 +93,7 @@ class IncipientSlipParameters:
     prior_friction : float -- friction estimate before a slip was seen (lowest expected) [-], > 0.
     maximum_friction : float -- highest friction the probe believes (it stops there) [-], > prior_friction.
     probe_rate : float -- relative rise of the friction estimate per second while probing [1/s], > 0.
-    probe_delay : float -- time in HOLD before the probe starts (the lift's signals settle) [s], >= 0.
+    probe_delay : float -- time from the lift's start before the probe starts (the weight is off the table) [s], >= 0.
     total_drop : float -- fall of a fingertip's total tangential load and normal force from where the watch began
         that means gross slip [-], (0, 1).
     watch_frames : int -- window over which a bump's ratio is compared with its normal force [frames], >= 2.
