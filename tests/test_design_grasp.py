@@ -232,3 +232,20 @@ def test_fit_plans_refuse_bad_values_by_name():
         FitPlan(load_ratios=(0.3, 1.2))
     with pytest.raises(ValueError, match=r"fit plan size_contact=True must be a number"):
         FitPlan(size_contact=True)
+
+
+def test_the_closed_loop_cuts_the_bump_law_at_its_own_designs_radius(grasp_sweep):
+    """The contact kernel's depth limit (C_MAX_DEPTH: a bump pressed past its radius carries no force) is the radius
+    of the plant's design, not the shipped one: 7 mm for the pair, 0.35 x 40 / 3 mm for the packaged 3x3."""
+    from controller.closed_loop import TABLE_I_OBJECTS, GraspWorld, TrialSettings
+    from controller.closed_loop import _kernel as K
+    from controller.design import SensorModel
+    from controller.plant import FingertipPlant, PlantFactors, PlantModel
+
+    *_, fitted = grasp_sweep
+    obj = TABLE_I_OBJECTS["bottle_upright"]
+    for model, radius in ((PlantModel.from_fit(fitted), PAIR.bump_radius), (None, 0.35 * 40.0 / 3.0)):
+        array = PAIR.sensor(SensorModel.CAPACITIVE) if model is not None else None
+        plant = FingertipPlant(PlantFactors(bump_height=0.1), array, model=model)
+        world = GraspWorld(obj, TrialSettings(), plant=plant)
+        assert world.bridge.config[K.C_MAX_DEPTH] == radius      # set from the design's own number, not computed
