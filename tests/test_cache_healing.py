@@ -85,7 +85,8 @@ def test_a_column_set_of_another_shape_is_named_and_replaced(fresh_cache):
         warnings.simplefilter("always")
         result = _solve()
     (message,) = _cache_warnings(caught)
-    assert str(stored) in message and f"{values.shape[0] - 3} rows where this compliance has {values.shape[0]}" in message
+    assert str(stored) in message
+    assert f"{values.shape[0] - 3} rows where this compliance has {values.shape[0]}" in message
     assert result.timings["compliance_columns_loaded"] == 0
 
 
