@@ -28,8 +28,8 @@ from controller.plant import PlantModel, nominal_model
 from controller.plant.fingertip_plant import FingertipPlant, PlantFactors, SensorPlane
 from controller.sensing import SensorArray
 
-__all__ = ["EstimatorBench", "estimator_bench", "bench_array", "BENCH_SEED", "BENCH_NOISE", "BENCH_FRAMES", "SMALL_SHIFTS",
-           "REFERENCE_FORCES"]
+__all__ = ["EstimatorBench", "estimator_bench", "bench_array", "BENCH_SEED", "BENCH_NOISE", "BENCH_FRAMES",
+           "SMALL_SHIFTS", "REFERENCE_FORCES"]
 
 BENCH_SEED = 8                  # the bench fingertip's own node draws and noise (no trial uses this build)
 BENCH_NOISE = 0.001             # N rms per node at small pressure: the array type the trials use

@@ -2,14 +2,14 @@
 room of controller.
 
 A design (``FingertipDesign``) is the paper's kind of fingertip - rows x cols hemispheres (bump radius, pitch) on a
-base layer (thickness, footprint) of a linear-elastic gel (E, nu), read by a capacitive array (sensor pitch, pad
-fill factor). A study (``DesignStudy``) fixes what every design goes through: a rigid plate pressed with the grasp
-force, then (1) sheared by force control to the load ratios Q/(mu P) of ``load_ratios`` and (2), on another path from
-the same press, twisted about the array centre (angle control, for two or more bumps). The sensor reads the FEM's
-base pressure (``controller.sensing.sensor``, ``controller.sensing.capacitive``) and the estimator (``controller.estimation.estimator``) turns
-it into shear displacements and rotations. Metrics (``METRICS``, one column each): translational and rotational
-estimation errors, the stick-ratio drop near gross slip (the criterion of the paper's Figs. 3/4), force and torque
-capacity per unit grasp force, and the mesh's error estimate.
+base layer (thickness, footprint) of a linear-elastic gel (E, nu), read by a capacitive array (sensor pitch, pad fill
+factor). A study (``DesignStudy``) fixes what every design goes through: a rigid plate pressed with the grasp force,
+then (1) sheared by force control to the load ratios Q/(mu P) of ``load_ratios`` and (2), on another path from the
+same press, twisted about the array centre (angle control, for two or more bumps). The sensor reads the FEM's base
+pressure (``controller.sensing.sensor``, ``controller.sensing.capacitive``) and the estimator
+(``controller.estimation.estimator``) turns it into shear displacements and rotations. Metrics (``METRICS``, one
+column each): translational and rotational estimation errors, the stick-ratio drop near gross slip (the criterion of
+the paper's Figs. 3/4), force and torque capacity per unit grasp force, and the mesh's error estimate.
 
 ``design_sweep`` runs many designs on dask.distributed (a LocalCluster by default, or a scheduler address) or in
 this process, resumable: with ``out_dir`` each design's record is written as it finishes and a re-run skips the

@@ -1,7 +1,7 @@
 """Plant: what makes the data a controller reads - the gripper actuator, the closed loop's fingertip as built (FEM
 sensor plane, capacitive arrays, named errors against the design), its sensor bench, and a closed-form Hertz
-fingertip, of the shipped design or of any design calibrated on its own FEM (``PlantModel``); may import controller.sensing, never estimation or control (docs/design.md, sec. 9: truth and belief
-apart)."""
+fingertip, of the shipped design or of any design calibrated on its own FEM (``PlantModel``); may import
+controller.sensing, never estimation or control (docs/design.md, sec. 9: truth and belief apart)."""
 
 from ._model import PlantModel, nominal_model
 from .actuator import ActuatorParameters, ActuatorPlant, contact_force
