@@ -20,6 +20,14 @@ NAME = "design"
 # objectives of the Pareto front: lower estimation errors and a gentler stick-ratio drop, more torque capacity
 OBJECTIVES = {"translational_error": "lower", "rotational_error": "lower", "stick_ratio_drop": "lower",
               "torque_capacity": "higher", "combined_torque_capacity": "higher"}
+# and with the closed loop ([study] closed_loop = true): more grasps held, at a grip nearer the slip limit
+GRASP_OBJECTIVES = {"grasp_success_rate": "higher", "grip_over_slip_limit": "lower"}
+
+
+def objectives(table) -> dict:
+    """OBJECTIVES, and GRASP_OBJECTIVES when some design has closed-loop results."""
+    closed = "grasp_success_rate" in table and table["grasp_success_rate"].notna().any()
+    return {**OBJECTIVES, **GRASP_OBJECTIVES} if closed else dict(OBJECTIVES)
 
 
 def add_arguments(parser) -> None:
@@ -108,16 +116,30 @@ def run(out_dir, quick: bool = False, design_file: Path | None = None, scheduler
                                          progress=not quiet, on_record=on_record, on_stored=known.update,
                                          with_increments=True, force=force, max_hours=max_hours)
         _write(table, increments, out_dir)
-        front = pareto_front(table, OBJECTIVES)
+        goals = objectives(table)
+        front = pareto_front(table, goals)
         seconds = time.perf_counter() - start
-        save_figure(plot_pareto(table, front, spec.name, spec.axes or DESIGN_COLUMNS[:3]), out_dir, NAME)
+        save_figure(plot_pareto(table, front, spec.name, spec.axes or DESIGN_COLUMNS[:3], goals), out_dir, NAME)
     failed = int((table["status"] != "ok").sum())
     print(f"{NAME}: {len(table)} designs, {failed} failed, {int(front.sum())} on the Pareto front; {seconds:.1f} s")
     for _, row in table[front].iterrows():
         print(f"  front: {_label(row, spec.axes)}: translation {100 * row['translational_error']:.1f} %, rotation "
               f"{_percent(row['rotational_error'])}, drop {row['stick_ratio_drop']:.2f}, torque capacity "
-              f"{row['torque_capacity']:.2f} mm")
+              f"{row['torque_capacity']:.2f} mm{_grasp_words(row)}")
+    for _, row in table[table["grasp_status"].isin(["refused", "failed"])].iterrows():
+        print(f"  closed loop {row['grasp_status']}: {_label(row, spec.axes)}: {row['grasp_error']}")
     return {"designs": len(table), "failed": failed, "front": int(front.sum()), "wall_time": seconds}
+
+
+def _grasp_words(row) -> str:
+    """The closed loop's numbers of a table row, or nothing for a sensor-only one."""
+    import pandas as pd
+
+    if pd.isna(row["grasp_success_rate"]):
+        return ""
+    ratio = "-" if pd.isna(row["grip_over_slip_limit"]) else f"{row['grip_over_slip_limit']:.2f}"
+    return (f"; held {row['grasp_held']}/{row['grasp_trials']} (95 % {100 * row['grasp_success_low']:.0f}-"
+            f"{100 * row['grasp_success_high']:.0f} %), grip / slip limit {ratio}")
 
 
 def _percent(value) -> str:
@@ -131,20 +153,29 @@ def _label(row, axes) -> str:
                      for axis in axes)
 
 
-def plot_pareto(table, front, title: str, axes):
-    """Two trade-offs, each design a point (the Pareto front over all OBJECTIVES filled, the 2D front of the panel
-    drawn): translational error against torque capacity, rotational error against the stick-ratio drop."""
+def plot_pareto(table, front, title: str, axes, goals: dict | None = None):
+    """Trade-offs, each design a point (the Pareto front over all ``goals`` filled, default OBJECTIVES; the 2D
+    front of the panel drawn): translational error against torque capacity, rotational error against the
+    stick-ratio drop, and with the closed loop the grasp axis: success rate (95 % Wilson interval) against the
+    translational error, and against the grip over the slip limit."""
     import matplotlib.pyplot as plt
     import numpy as np
 
     from controller.design import pareto_front
 
-    panels = ((("torque_capacity", "torque capacity per unit grasp force [mm]", 1.0),
+    goals = OBJECTIVES if goals is None else goals
+    panels = [(("torque_capacity", "torque capacity per unit grasp force [mm]", 1.0),
                ("translational_error", "translational estimation error [%]", 100.0)),
               (("stick_ratio_drop", "stick-ratio drop before gross slip, c/a / (1 - Q/(mu P)) [1]", 1.0),
-               ("rotational_error", "rotational estimation error [%]", 100.0)))
-    fig, grid = plt.subplots(1, 2, figsize=(12, 5))
+               ("rotational_error", "rotational estimation error [%]", 100.0))]
+    if "grasp_success_rate" in goals:
+        panels += [(("translational_error", "translational estimation error [%]", 100.0),
+                    ("grasp_success_rate", "grasp success rate (held) [%]", 100.0)),
+                   (("grip_over_slip_limit", "settled grip / the trial's slip limit [-]", 1.0),
+                    ("grasp_success_rate", "grasp success rate (held) [%]", 100.0))]
+    fig, grid = plt.subplots(1, len(panels), figsize=(6 * len(panels), 5))
     ok = (table["status"] == "ok").to_numpy()
+    every = {**OBJECTIVES, **GRASP_OBJECTIVES}
     for axis, ((x_key, x_label, x_scale), (y_key, y_label, y_scale)) in zip(grid, panels):
         x = table[x_key].to_numpy(dtype=float, na_value=np.nan) * x_scale
         y = table[y_key].to_numpy(dtype=float, na_value=np.nan) * y_scale
@@ -152,7 +183,12 @@ def plot_pareto(table, front, title: str, axes):
         axis.scatter(x[shown & ~front], y[shown & ~front], facecolors="none", edgecolors="#636363", label="design")
         axis.scatter(x[shown & front], y[shown & front], color="#de2d26", label="Pareto front (all objectives)",
                      zorder=3)
-        local = pareto_front(table, {x_key: OBJECTIVES[x_key], y_key: OBJECTIVES[y_key]}) & shown
+        if y_key == "grasp_success_rate":
+            low, high = (table[key].to_numpy(dtype=float, na_value=np.nan) * y_scale
+                         for key in ("grasp_success_low", "grasp_success_high"))
+            axis.errorbar(x[shown], y[shown], yerr=[y[shown] - low[shown], high[shown] - y[shown]], fmt="none",
+                          ecolor="#969696", capsize=3, zorder=1, label="95 % Wilson interval")
+        local = pareto_front(table, {x_key: every[x_key], y_key: every[y_key]}) & shown
         order = np.argsort(x[local])
         axis.plot(x[local][order], y[local][order], "--", color="#de2d26", lw=1, label="front of this panel")
         for number, index in enumerate(np.flatnonzero(front), start=1):     # numbered; listed under the panels
@@ -164,7 +200,7 @@ def plot_pareto(table, front, title: str, axes):
         axis.grid(alpha=0.3)
     grid[0].legend(fontsize=8)
     fig.suptitle(f"{title}: {int(ok.sum())} designs, {int(front.sum())} on the Pareto front\n"
-                 f"(objectives: {', '.join(f'{k} {v}' for k, v in OBJECTIVES.items())})", fontsize=9)
+                 f"(objectives: {', '.join(f'{k} {v}' for k, v in goals.items())})", fontsize=9)
     listing = [f"{number}: {_short_label(table.iloc[index], axes)}"
                for number, index in enumerate(np.flatnonzero(front), start=1)]
     fig.text(0.01, 0.01, "Pareto front:  " + ";   ".join(listing), fontsize=8, wrap=True, va="bottom")

@@ -13,7 +13,14 @@ The estimator (per-bump centre of pressure, the mean over the bumps) gives the s
 applied shift on the held-out shifts, before calibration (the design gain: fitted once per array on the ideal 1 mm
 cells, what a designer gets from the model) and after (gain re-fitted for this sensor model and pitch on
 CALIBRATION_SHIFTS). The base-plane CoP moves about a tenth of the plate shift, so an uncalibrated gain of 1 would
-read ~900 % high for every sensor: not a comparison worth plotting. The paper: a smaller pitch lowers the error; more bumps lower it up to 3x3, not beyond.
+read ~900 % high for every sensor: not a comparison worth plotting. The paper: a smaller pitch lowers the error;
+more bumps lower it up to 3x3, not beyond.
+
+``--grasp`` asks the figure's question of the grasp (``studies._fig6_grasp``): the same arrays at 1 and 3 mm pitch
+through the design study's closed loop (each calibrated on its own FEM, its plant from that FEM, its estimator fitted
+on its bench, Table I trials on the held-out draws), written to fig6_grasp.csv/.png/.pdf beside the bench's errors;
+the 1x1 array is refused by the closed loop, and shown with its reason. The design records go to
+``OUT/fig6_grasp/cases`` (a re-run resumes).
 """
 
 from __future__ import annotations
@@ -32,6 +39,27 @@ PITCHES = (1.0, 3.0)                   # mm
 SENSORS = ("cells", "small pads", "capacitive")
 NOISE_DRAWS = 10                       # noise draws of the capacitive sensor (seeds 0 ... 9)
 FRAMES_PER_STATE = 10                  # frames averaged per quasi-static state: 0.1 s at 100 Hz
+
+
+def add_arguments(parser) -> None:
+    parser.add_argument("--grasp", action="store_true",
+                        help="also judge each array and pitch by closed-loop grasp outcome (fig6_grasp.*)")
+    parser.add_argument("--grasp-trials", type=int, default=None,
+                        help="with --grasp: trials per Table I object (default 10; quick 1)")
+    parser.add_argument("--grasp-only", action="store_true",
+                        help="with --grasp: skip the FEM bench (the panel then shows the design study's error only)")
+    parser.add_argument("--workers", type=int, default=2, help="with --grasp: design-sweep workers (default 2)")
+
+
+def check_grasp_options(grasp: bool, grasp_trials, grasp_only: bool, workers) -> None:
+    """Refuse bad --grasp options by name (ValueError: exit code 2 on the command line)."""
+    from fem.validation import check_integer
+
+    if grasp_trials is not None:
+        check_integer("grasp_trials", grasp_trials, 1, 1000)
+    check_integer("workers", workers, 1, 256)
+    if (grasp_trials is not None or grasp_only) and not grasp:
+        raise ValueError("--grasp-trials and --grasp-only need --grasp")
 
 
 def sensor_model(sensor: str, pitch: float):
@@ -75,16 +103,32 @@ def evaluate(cop_shift: np.ndarray, shifts, design_gain: float | None = None) ->
                 calibration_r_squared=calibration.r_squared)
 
 
-def run(out_dir, quick: bool = False) -> dict:
-    """One FEM run per array, read by every sensor model at both pitches; CSV, PNG, PDF and the verdict."""
+def run(out_dir, quick: bool = False, grasp: bool = False, grasp_trials: int | None = None,
+        grasp_only: bool = False, workers: int = 2) -> dict:
+    """One FEM run per array, read by every sensor model at both pitches; CSV, PNG, PDF and the verdict; with
+    ``grasp`` the arrays' closed-loop panel too (module docstring)."""
+    check_grasp_options(grasp, grasp_trials, grasp_only, workers)
+    out_dir = Path(out_dir)
+    arrays = (1, 3) if quick else (1, 2, 3, 4)
+    summary, rows = ({"verdict": []}, []) if grasp_only else _bench(out_dir, quick, arrays)
+    if grasp:
+        summary = _grasp_panel(out_dir, quick, arrays, grasp_trials, workers, summary, rows)
+    return summary
+
+
+def _bench(out_dir: Path, quick: bool, arrays) -> tuple[dict, list[dict]]:
+    """The FEM bench of the figure: rows in fig6.csv, the figure; (summary with the verdict, rows)."""
     from tqdm import tqdm
 
     from contact.solver import solve_scene
-    from controller.estimation.bench import (BENCH_SIZE_BASE, BENCH_SIZE_CONTACT, bench_scene, bump_layout,
-                                             readings_operator)
+    from controller.estimation.bench import (
+        BENCH_SIZE_BASE,
+        BENCH_SIZE_CONTACT,
+        bench_scene,
+        bump_layout,
+        readings_operator,
+    )
 
-    out_dir = Path(out_dir)
-    arrays = (1, 3) if quick else (1, 2, 3, 4)
     shifts = (0.1, 0.2, 0.3) if quick else (0.05, 0.1, 0.15, 0.2, 0.25, 0.3)
     size_contact, size_base = (0.7, 1.5) if quick else (BENCH_SIZE_CONTACT, BENCH_SIZE_BASE)
     draws = 2 if quick else NOISE_DRAWS
@@ -107,7 +151,8 @@ def run(out_dir, quick: bool = False) -> dict:
                     design_gain = outcomes[0]["gain"]
                 mean = {key: float(np.mean([o[key] for o in outcomes])) for key in outcomes[0]}
                 peak = float(np.max([increment.base_pressure.max() for increment in result.increments]))
-                rows.append(dict(case=f"{n}x{n}", bumps=n * n, sensor=sensor, sensor_pitch=pitch, design_gain=design_gain,
+                rows.append(dict(case=f"{n}x{n}", bumps=n * n, sensor=sensor, sensor_pitch=pitch,
+                                 design_gain=design_gain,
                                  fill_factor=array.fill_factor, noise_draws=len(outcomes), **mean,
                                  error_after_spread_percent=float(np.std([o["error_after_percent"]
                                                                           for o in outcomes])),
@@ -123,7 +168,31 @@ def run(out_dir, quick: bool = False) -> dict:
     primary = [r for r in rows if r["sensor"] == "capacitive"]
     return {"max_error": max(r["error_after_percent"] for r in primary) / 100,
             "error_meaning": "largest mean relative error of the estimated shear displacement after gain "
-                             "calibration, capacitive sensor", "verdict": verdict}
+                             "calibration, capacitive sensor", "verdict": verdict}, rows
+
+
+def _grasp_panel(out_dir: Path, quick: bool, arrays, grasp_trials, workers: int, summary: dict,
+                 bench_rows: list[dict]) -> dict:
+    """The closed-loop design sweep of the bench's arrays (``studies._fig6_grasp``) beside the bench's rows:
+    fig6_grasp.csv/.png/.pdf and its verdict lines added to ``summary``."""
+    from controller.design import design_sweep
+    from studies._fig6_grasp import GRASP_TRIALS, bench_designs, grasp_rows, grasp_study, grasp_verdict, plot_grasp
+
+    trials = grasp_trials if grasp_trials is not None else (1 if quick else GRASP_TRIALS)
+    start = time.perf_counter()
+    table = design_sweep(bench_designs(arrays, PITCHES), grasp_study(quick, trials), out_dir=out_dir / "fig6_grasp",
+                         scheduler="synchronous" if workers == 1 else "local", workers=workers, progress=False)
+    wall = time.perf_counter() - start
+    rows = grasp_rows(table, bench_rows)
+    write_csv_atomic(out_dir / f"{NAME}_grasp.csv", rows)
+    save_figure(plot_grasp(rows, list(arrays), PITCHES, wall), out_dir, f"{NAME}_grasp")
+    verdict = grasp_verdict(rows, PITCHES)
+    for line in verdict:
+        print(f"{NAME}: {line}")
+    summary = dict(summary)
+    summary["verdict"] = [*summary.get("verdict", []), *verdict]
+    summary["grasp_wall_time"] = wall
+    return summary
 
 
 def _trend(rows, arrays, sensor: str, key: str) -> tuple[int, dict]:

@@ -40,6 +40,7 @@ Object-table contact stays MuJoCo's (elliptic cone): it only decides when the ob
 
 
 from ._batch import default_processes, map_trials, run_trials
+from ._bench import EstimatorBench, belief_errors, estimator_bench
 from ._bridge import ContactBridge
 from ._minimum import MinimumForce, holds_at, minimum_grip_force
 from ._multirate import LoopSample, MultiRateRunner, rate_ratio
@@ -56,4 +57,4 @@ __all__ = ["GraspObject", "TABLE_I_OBJECTS", "TargetDesign", "TrialSettings", "T
            "required_grip_force", "default_tip", "DESIGN_FRICTION", "GRAVITY", "MM_PER_M", "PHYSICS_RATE_HZ",
            "ACTUATOR_RATE_HZ", "LOOP_RATE", "ROTATION_LIMIT", "TORQUE_LIMIT", "ARM_RADIUS", "LoopSample",
            "MultiRateRunner", "rate_ratio", "FRICTION_RANGE", "PLANT_SPREAD", "OUTCOMES", "TUNING_SEED",
-           "HELD_OUT_SEED"]
+           "HELD_OUT_SEED", "estimator_bench", "EstimatorBench", "belief_errors"]

@@ -6,23 +6,30 @@ presses at 1-16 N and shears of 0.3 and 0.6 of the force along x and y, 20 avera
 the offsets); the records of the paper's estimator (unsheared presses at 40 forces for the CoP reference, small
 shifts for its gain) and of the displacement-target law's design are kept for each trial's own noise gate. On the
 MODEL plane (the known world) the estimator's model is the reduced model itself and the records are noise-free, as
-in earlier rounds. Computed once per plane and array in a process (a few seconds).
+in earlier rounds. Computed once per plane, design and array in a process (a few seconds).
+
+The bench is of a design: by default the shipped 3x3 fingertip on the paper's array; ``model`` (a ``PlantModel``,
+any design calibrated on its own FEM) and ``array`` (the design's sensor) make it the bench of another design, whose
+nominal build the rig loads. The estimator still sees only what the rig applied and the readings; the bench keeps
+the key of its rig (``EstimatorBench.rig``), by which the displacement law's design pairs are run on the same rig.
 """
 
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from controller.estimation import BumpLayout
 from controller.estimation.sensor_model import SensorBelief, fit_sensor_belief, sensor_operator
 from controller.plant.bench_rig import BenchLoad, run_bench
+from controller.plant import PlantModel, nominal_model
 from controller.plant.fingertip_plant import FingertipPlant, PlantFactors, SensorPlane
+from controller.sensing import SensorArray
 
-__all__ = ["EstimatorBench", "estimator_bench", "BENCH_SEED", "BENCH_NOISE", "BENCH_FRAMES", "SMALL_SHIFTS",
-           "REFERENCE_FORCES"]
+__all__ = ["EstimatorBench", "estimator_bench", "bench_array", "BENCH_SEED", "BENCH_NOISE", "BENCH_FRAMES",
+           "SMALL_SHIFTS", "REFERENCE_FORCES"]
 
 BENCH_SEED = 8                  # the bench fingertip's own node draws and noise (no trial uses this build)
 BENCH_NOISE = 0.001             # N rms per node at small pressure: the array type the trials use
@@ -39,7 +46,8 @@ REFERENCE_FORCE = 5.0                                  # N
 class EstimatorBench:
     """What the estimator takes from its bench: the sensor model (``belief``), the rest readings' offsets, the
     unsheared presses (``references``: forces (n,) [N], readings (n, n_nodes) [N]) and the small shifts (readings
-    (3, n_nodes) [N]) of the paper's estimator, and the plane it was made on."""
+    (3, n_nodes) [N]) of the paper's estimator, the plane it was made on and the key of its rig (``_RIGS``: the
+    design and array the rig loaded; a name, not the plant)."""
 
     plane: SensorPlane
     belief: SensorBelief
@@ -47,6 +55,31 @@ class EstimatorBench:
     reference_forces: np.ndarray
     reference_readings: np.ndarray
     shift_readings: np.ndarray
+    rig: tuple = ()
+
+
+# rig key -> (PlantModel, SensorArray or None): the benches run in this process, for their design pairs
+_RIGS: dict = {}
+
+
+def bench_array(array: SensorArray | None) -> SensorArray | None:
+    """The array a bench is keyed by: a trial's array with its node's noise floor cleared (the bench sets its own
+    noise, ``BENCH_NOISE``), so that trials of one design at any noise share one bench; None stays None."""
+    if array is None or array.node is None:
+        return array
+    return replace(array, node=replace(array.node, noise_floor=0.0))
+
+
+def _rig(model: PlantModel | None, array: SensorArray | None) -> tuple:
+    model = nominal_model() if model is None else model
+    if not isinstance(model, PlantModel):
+        raise ValueError(f"model={model!r} must be a PlantModel")
+    if array is not None and not isinstance(array, SensorArray):
+        raise ValueError(f"array={array!r} must be a SensorArray")
+    array = bench_array(array)
+    key = (model.key, None if array is None else repr(array))
+    _RIGS[key] = (model, array)
+    return key
 
 
 def _records(plant, loads, noise_free: bool):
@@ -54,12 +87,19 @@ def _records(plant, loads, noise_free: bool):
     return run_bench(plant, loads, frames, seed=BENCH_SEED)
 
 
-@functools.lru_cache(maxsize=4)
-def estimator_bench(plane: SensorPlane = SensorPlane.FEM) -> EstimatorBench:
-    """The bench of the module docstring on ``plane`` (cached per process)."""
-    plane = SensorPlane(plane)
+def estimator_bench(plane: SensorPlane = SensorPlane.FEM, model: PlantModel | None = None,
+                    array: SensorArray | None = None) -> EstimatorBench:
+    """The bench of the module docstring on ``plane``, of the design of ``model`` (default the shipped 3x3) read
+    by ``array`` (default the paper's; its noise floor is the bench's own); cached per process."""
+    return _estimator_bench(SensorPlane(plane), _rig(model, array))
+
+
+@functools.lru_cache(maxsize=16)
+def _estimator_bench(plane: SensorPlane, rig: tuple) -> EstimatorBench:
+    model, array = _RIGS[rig]
     known = plane is SensorPlane.MODEL
-    plant = FingertipPlant(PlantFactors(), noise=0.0 if known else BENCH_NOISE, seed=BENCH_SEED, plane=plane)
+    plant = FingertipPlant(PlantFactors(), array, noise=0.0 if known else BENCH_NOISE, seed=BENCH_SEED, plane=plane,
+                           model=model)
     design, array = plant.mechanics.design, plant.array
     layout = BumpLayout.grid((design.cols, design.rows), design.pitch)
     rest = [BenchLoad("rest") for _ in range(REST_RECORDS)]
@@ -78,7 +118,7 @@ def estimator_bench(plane: SensorPlane = SensorPlane.FEM) -> EstimatorBench:
     cut = REST_RECORDS + len(fit)
     return EstimatorBench(plane, belief, offset, np.array(REFERENCE_FORCES),
                           np.stack([r.readings.ravel() for r in records[cut:cut + len(references)]]),
-                          np.stack([r.readings.ravel() for r in records[cut + len(references):]]))
+                          np.stack([r.readings.ravel() for r in records[cut + len(references):]]), rig)
 
 
 def _known_belief(plant, array, layout, offset) -> SensorBelief:
@@ -90,21 +130,28 @@ def _known_belief(plant, array, layout, offset) -> SensorBelief:
                         {"records": 0, "note": "the known world: the reduced model is the plant's sensor plane"})
 
 
-def design_pairs(plane: SensorPlane, friction: float, load_ratio: float, torque_ratio: float, force: float) -> dict:
+def design_pairs(plane: SensorPlane, friction: float, load_ratio: float, torque_ratio: float, force: float,
+                 rig: tuple = ()) -> dict:
     """Readings (2, n_nodes) [N] of (unloaded, loaded) bench pairs for the displacement-target law's design
     (``SensingChain.design_references``): a shear of ``load_ratio`` of the slip load and a twist of
     ``torque_ratio`` of the slip torque on a plate of ``friction``, at ``force`` and 4 ``force``, and at +-1 % of
-    ``force`` with the load held. Cached."""
-    return _design_pairs(SensorPlane(plane), float(friction), float(load_ratio), float(torque_ratio), float(force))
+    ``force`` with the load held, on the rig of an ``EstimatorBench`` (default the shipped design's). Cached."""
+    rig = rig or _rig(None, None)
+    if rig not in _RIGS:
+        raise ValueError(f"rig={rig!r} is not a bench of this process (EstimatorBench.rig)")
+    return _design_pairs(SensorPlane(plane), float(friction), float(load_ratio), float(torque_ratio), float(force),
+                         rig)
 
 
 DESIGN_STEP = 0.01        # +-1 % force change for the displacement law's slip factors
 
 
 @functools.lru_cache(maxsize=16)
-def _design_pairs(plane, friction, load_ratio, torque_ratio, force) -> dict:
+def _design_pairs(plane, friction, load_ratio, torque_ratio, force, rig) -> dict:
+    model, array = _RIGS[rig]
     known = plane is SensorPlane.MODEL
-    plant = FingertipPlant(PlantFactors(), noise=0.0 if known else BENCH_NOISE, seed=BENCH_SEED, plane=plane)
+    plant = FingertipPlant(PlantFactors(), array, noise=0.0 if known else BENCH_NOISE, seed=BENCH_SEED, plane=plane,
+                           model=model)
     count = len(plant.mechanics.centres)
 
     def pair(total, load, torque):
@@ -131,9 +178,12 @@ HELD_OUT_LOADS = (BenchLoad("press", 3.0), BenchLoad("press", 12.0), BenchLoad("
                   BenchLoad("shear", 3.0, (0.0, -1.5), 8.0))
 
 
-def belief_errors(plane: SensorPlane = SensorPlane.FEM, factors: PlantFactors = PlantFactors(), seed: int = 1):
+def belief_errors(plane: SensorPlane = SensorPlane.FEM, factors: PlantFactors = PlantFactors(), seed: int = 1,
+                  model: PlantModel | None = None, array: SensorArray | None = None):
     """The estimator's per-bump errors on held-out bench states of a build with ``factors`` (default: a nominal
-    build of other node draws than the bench's): {"force": largest |P_hat / P - 1|, "ratio": largest
+    build of other node draws than the bench's) of the design of ``model`` read by ``array`` (defaults: the
+    shipped 3x3 on the paper's array), the estimator fitted on that design's bench: {"force": largest
+    |P_hat / P - 1|, "ratio": largest
     |rho_hat - Q / P| [-], "ratio_relative": largest |rho_hat - rho| / |rho| where |rho| > 0.1}. The plant's truth
     is read here only to score the estimate (a study's question), never by the estimator."""
     from controller.plant.bench_rig import rig_states
@@ -141,8 +191,9 @@ def belief_errors(plane: SensorPlane = SensorPlane.FEM, factors: PlantFactors = 
     from ._sensing import SensingChain
 
     known = SensorPlane(plane) is SensorPlane.MODEL
-    plant = FingertipPlant(factors, noise=0.0 if known else BENCH_NOISE, seed=seed, plane=plane)
-    chain = SensingChain(estimator_bench(plane))
+    plant = FingertipPlant(factors, bench_array(array), noise=0.0 if known else BENCH_NOISE, seed=seed, plane=plane,
+                           model=model)
+    chain = SensingChain(estimator_bench(plane, model, array))
     rest = run_bench(plant, [BenchLoad("rest") for _ in range(REST_RECORDS)], BENCH_FRAMES, seed=seed + 1)
     chain.tare(np.stack([np.stack([r.readings.ravel()] * 2) for r in rest]))
     records = run_bench(plant, HELD_OUT_LOADS, BENCH_FRAMES, seed=seed + 2)

@@ -205,7 +205,7 @@ class SensingChain:
         overturning moment h Q / P stays constant: exponent 0)."""
         design, force, step = self.design, REFERENCE_FORCE, DESIGN_STEP
         pairs = design_pairs(self.bench.plane, design.friction_coefficient, design.load_ratio, design.torque_ratio,
-                             force)
+                             force, self.bench.rig)
         u_ref = self._design_signal(pairs["translation", 1.0])[0]
         theta_ref = self._design_signal(pairs["twist", 1.0])[1]
         growth = (math.log(self._design_signal(pairs["translation", 4.0])[0] / u_ref) / math.log(4.0),

@@ -79,8 +79,9 @@ class GraspWorld:
     obj : GraspObject
     settings : TrialSettings
     plant : FingertipPlant, optional -- both fingertips as built (default: ``settings.plant``'s errors on the
-        FEM-calibrated 3x3 design, ``settings.sensor_plane``, the trial's noise and seed). The truth side: the
-        estimator is calibrated on its own bench (``_bench``) and tared at rest, and never reads the plant.
+        FEM-calibrated 3x3 design, ``settings.sensor_plane``, the trial's noise and seed; any design: a plant of its
+        ``PlantModel`` and array). The truth side: the estimator is calibrated on the bench of the plant's design
+        (``_bench``: a nominal build of the same model and array type) and tared at rest, and never reads the plant.
     controller_parameters : IncipientSlipParameters or GraspForceParameters, optional -- the controller's
         parameters, of the kind ``settings.controller`` names (rotational detection is taken from ``settings``).
     """
@@ -111,7 +112,8 @@ class GraspWorld:
                                     self.acceleration_parameters, 0.5 * obj.size[1] + APPROACH_GAP_M,
                                     settings.implicit_coupling, self.plant.friction_anisotropy)
         # the estimator: calibrated on a nominal build's bench, then tared on this build's arrays at rest
-        self.sensing = SensingChain(estimator_bench(self.plant.plane), settings.targets)
+        self.sensing = SensingChain(estimator_bench(self.plant.plane, self.plant.model, self.plant.array_design),
+                                    settings.targets)
         self.sensing.tare(self._rest_readings())
         self.grasp = _controller(settings, controller_parameters, self.sensing)
         # contacts object-table MuJoCo found in the last step (a position-stage sensor: it does not act on the world)

@@ -15,11 +15,50 @@ __all__ = ["evaluate_designs", "design_record"]
 
 
 def design_record(case_id: str, design, status: str, error: str | None, metrics: dict, increments: list,
-                  timings: dict, group: str) -> dict:
-    """The JSON record of one design: its fields, status, error, metrics, increment rows, timings, worker."""
+                  timings: dict, group: str, grasp: dict | None = None) -> dict:
+    """The JSON record of one design: its fields, status, error, metrics, increment rows, timings, worker, and the
+    closed loop's ``grasp`` {"status": off / ok / refused / failed, "error": reason, "fit_key": calibration}."""
     return {"case_id": case_id, "status": status, "error": error, "design": dataclasses.asdict(design),
             "metrics": metrics, "increments": increments, "timings": timings, "group": group,
-            "worker": f"{socket.gethostname()}:{os.getpid()}"}
+            "worker": f"{socket.gethostname()}:{os.getpid()}",
+            "grasp": dict(grasp) if grasp is not None else {"status": "off", "error": "", "fit_key": ""}}
+
+
+def _group_fit(design, study) -> tuple[object, dict, dict]:
+    """The calibration of a group's mechanical design: (FittedFingertip or None, grasp info, timings)."""
+    from ._grasp import array_design, fit_plan, grasp_refusal
+
+    if not study.closed_loop:
+        return None, {"status": "off", "error": "", "fit_key": ""}, {}
+    reason = grasp_refusal(design)
+    if reason:
+        return None, {"status": "refused", "error": reason, "fit_key": ""}, {}
+    from contact.reduced.design_fit import fit_fingertip
+
+    start = time.perf_counter()
+    try:
+        fitted = fit_fingertip(array_design(design), fit_plan(study))
+    except (ValueError, RuntimeError, ArithmeticError) as failure:
+        return None, {"status": "failed", "error": f"calibration: {type(failure).__name__}: {failure}",
+                      "fit_key": ""}, {"calibration_wall": time.perf_counter() - start}
+    timings = {"calibration_wall": time.perf_counter() - start, "calibration_cached": float(fitted.cached),
+               "calibration_fem": float(fitted.timings.get("fem", math.nan))}
+    return fitted, {"status": "ok", "error": "", "fit_key": fitted.key}, timings
+
+
+def _grasp(design, study, fitted, grasp: dict) -> tuple[dict, dict, dict]:
+    """The closed-loop metrics of one design (``_grasp.grasp_metrics``) with the calibration's errors: (metrics,
+    grasp info, timings); a failure is recorded, not raised."""
+    from ._grasp import fit_metrics, grasp_metrics
+
+    if fitted is None:
+        return {}, dict(grasp), {}
+    metrics = fit_metrics(fitted)
+    try:
+        found, timings = grasp_metrics(design, study, fitted)
+    except (ValueError, RuntimeError, ArithmeticError) as failure:
+        return metrics, {**grasp, "status": "failed", "error": f"closed loop: {type(failure).__name__}: {failure}"}, {}
+    return {**metrics, **found}, dict(grasp), timings
 
 
 def _increment_rows(result, path: str, ratios, estimates, bumps_truth=None) -> list[dict]:
@@ -82,6 +121,7 @@ def evaluate_designs(items: list[tuple[str, dict, dict]], cases_dir: str | None 
     except (PathNotCompleted, LoadNotCarried, ContactUnderResolved, ValueError, RuntimeError) as failure:
         error = f"{type(failure).__name__}: {failure}"
     fem_seconds = time.perf_counter() - start
+    fitted, grasp, fit_timings = _group_fit(first, study)      # one calibration for the group's mechanical design
     for case_id, design, study in designs:
         case_start = time.perf_counter()
         metrics = dict(fem_metrics)
@@ -106,7 +146,17 @@ def evaluate_designs(items: list[tuple[str, dict, dict]], cases_dir: str | None 
             metrics = {key: (None if key in bad else value) for key, value in metrics.items()}
         case_timings = dict(timings, fem_wall=fem_seconds if case_id == designs[0][0] else 0.0,
                             sensor_wall=time.perf_counter() - case_start)
-        record = design_record(case_id, design, status, message, metrics, increments, case_timings, group)
+        closed, case_grasp, closed_timings = _grasp(design, study, fitted, grasp)
+        metrics.update(closed)
+        if case_id == designs[0][0]:
+            case_timings.update(fit_timings)
+        elif fit_timings:                         # the group's first design paid for the shared calibration
+            case_timings.update({key: 0.0 for key in fit_timings}, calibration_cached=1.0)
+        case_timings.update(closed_timings)
+        if case_grasp["status"] == "failed" and status == "ok":      # the sensor's metrics are kept beside it
+            status, message = "failed", case_grasp["error"]
+        record = design_record(case_id, design, status, message, metrics, increments, case_timings, group,
+                               case_grasp)
         if cases_dir is not None:
             write_record(cases_dir, record)
         yield record

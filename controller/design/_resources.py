@@ -23,6 +23,10 @@ SENSOR_OPERATOR_BYTES_PER_NODE = 24.0
 # sampling, noise and the estimator per node, frame and draw: measured 0.064 s for the 3x3 design's 13 x 13 nodes,
 # 10 frames per state, 8 states, 2 paths and 2 draws (1.2e-6 s), on a machine at load 4; three times that here
 SENSOR_SECONDS_PER_NODE_FRAME = 4e-6
+# the closed loop (DesignStudy.closed_loop): one Table I trial took 0.4-2.7 s of a loaded core (median about 0.6 s,
+# design sweeps of the 2x2 and 3x3 designs), the estimator's bench 0.7-1.1 s; rounded up
+TRIAL_SECONDS = 1.0
+BENCH_SECONDS = 5.0
 
 
 def _sensor_cost(design: FingertipDesign, study: DesignStudy) -> tuple[float, float]:
@@ -52,10 +56,28 @@ def design_tasks(designs: list[FingertipDesign], study: DesignStudy):
         sensors = [_sensor_cost(design, study) for design in members]
         memory += max(bytes_ for bytes_, _ in sensors)
         seconds += sum(seconds_ for _, seconds_ in sensors)
+        calibration = _closed_loop_cost(members, study)
+        memory, seconds = max(memory, calibration[0]), seconds + calibration[1]
         first = members[0]
         label = (f"the design {first.rows}x{first.cols}, bump radius {first.bump_radius:g} mm, base "
                  f"{first.base_width:g} x {first.base_depth:g} mm, sensor pitch {first.sensor_pitch:g} mm")
         yield Task(label, memory, scale * seconds if math.isfinite(seconds) else math.inf)
+
+
+def _closed_loop_cost(members: list[FingertipDesign], study: DesignStudy) -> tuple[float, float]:
+    """(bytes, seconds) of the closed loop of one FEM group: the design's calibration paths on one mesh
+    (``contact.reduced.design_fit``; nothing for a refused design) and every member's bench and trials."""
+    from contact.reduced._fit_plan import fit_scenes
+
+    from ._grasp import array_design, fit_plan, grasp_refusal
+
+    if not study.closed_loop or grasp_refusal(members[0]):
+        return 0.0, 0.0
+    scenes = [scene for _, scene in fit_scenes(array_design(members[0]), fit_plan(study)).values()]
+    costs = [scene_cost(scene, prepare=index == 0) for index, scene in enumerate(scenes)]
+    trials = study.grasp_trials * len(study.grasp_objects)
+    return (max(cost["bytes"] for cost in costs),
+            sum(cost["seconds"] for cost in costs) + len(members) * (BENCH_SECONDS + TRIAL_SECONDS * trials))
 
 
 def _groups(designs: list[FingertipDesign]) -> dict:

@@ -120,6 +120,14 @@ class DesignStudy:
     sensor : SensorModel of the sensor.
     noise_draws : noise draws per design (a noisy sensor; the errors are their mean), >= 1.
     frames_per_state : frames averaged per quasi-static state (0.1 s at 100 Hz), >= 1.
+    closed_loop : also judge each design by its grasp (``_grasp``): calibrate it on its own FEM, build its plant and
+        its estimator's bench, run Table I trials; False: the sensor-only sweep (fast screening).
+    grasp_trials : randomised trials per Table I object, 1 to 1000.
+    grasp_objects : the Table I objects tried (names of ``controller.closed_loop.TABLE_I_OBJECTS``).
+    grasp_seed : seed of the trials' draws (default the held-out seed, ``HELD_OUT_SEED``).
+    plant_spread : each build's plant factors uniform in +-plant_spread, in [0, 0.5].
+    calibration_size_contact, calibration_size_base : element sizes of the design's calibration mesh [mm]
+        (``contact.reduced.design_fit.FitPlan``).
     """
 
     normal_force: float = 2.0
@@ -132,6 +140,13 @@ class DesignStudy:
     sensor: SensorModel = SensorModel.CAPACITIVE
     noise_draws: int = 5
     frames_per_state: int = 10
+    closed_loop: bool = False
+    grasp_trials: int = 10
+    grasp_objects: tuple[str, ...] = ("bottle_upright", "bottle_horizontal", "eclair")
+    grasp_seed: int = 7919                  # controller.closed_loop.HELD_OUT_SEED (tests/test_design_grasp.py)
+    plant_spread: float = 0.1
+    calibration_size_contact: float = 0.7
+    calibration_size_base: float = 1.0
 
     def __post_init__(self):
         for name in ("normal_force", "friction_coefficient", "size_contact", "size_base", "size_far"):
@@ -153,10 +168,46 @@ class DesignStudy:
             raise ValueError(f"sensor={self.sensor!r} is not one of {[m.value for m in SensorModel]}") from None
         check_integer("noise_draws", self.noise_draws, 1, 1000)
         check_integer("frames_per_state", self.frames_per_state, 1, 10_000)
+        self._check_closed_loop()
+
+    def _check_closed_loop(self) -> None:
+        """The closed-loop settings, each refused by name with what is allowed."""
+        from controller.closed_loop._trial import TABLE_I_OBJECTS
+        from controller.plant import FACTOR_LIMIT
+
+        if not isinstance(self.closed_loop, bool):
+            raise ValueError(f"closed_loop={self.closed_loop!r} must be true or false")
+        check_integer("grasp_trials", self.grasp_trials, 1, 1000)
+        check_integer("grasp_seed", self.grasp_seed, 0, 2**63 - 1)
+        objects = self.grasp_objects
+        if isinstance(objects, (str, bytes)) or not hasattr(objects, "__len__") or not objects:
+            raise ValueError(f"grasp_objects={objects!r} must be a non-empty list of names of "
+                             f"{list(TABLE_I_OBJECTS)}")
+        unknown = [name for name in objects if name not in TABLE_I_OBJECTS]
+        if unknown or len(set(objects)) != len(objects):
+            problem = f"unknown {unknown}" if unknown else "a name repeats"
+            raise ValueError(f"grasp_objects={list(objects)!r}: {problem}; allowed: {list(TABLE_I_OBJECTS)}")
+        object.__setattr__(self, "grasp_objects", tuple(objects))
+        spread = check_number("plant_spread", self.plant_spread)
+        check_range("plant_spread", spread, 0.0, FACTOR_LIMIT)
+        object.__setattr__(self, "plant_spread", spread)
+        for name in ("calibration_size_contact", "calibration_size_base"):
+            object.__setattr__(self, name, check_positive(name, check_number(name, getattr(self, name)), "mm"))
 
     def document(self) -> dict:
-        return {**dataclasses.asdict(self), "load_ratios": list(self.load_ratios),
-                "twist_fractions": list(self.twist_fractions), "sensor": self.sensor.value}
+        """The study as plain values; the closed-loop fields only when ``closed_loop`` (a sensor-only study keeps
+        the document, and so the design ids, it had before they existed)."""
+        document = {**dataclasses.asdict(self), "load_ratios": list(self.load_ratios),
+                    "twist_fractions": list(self.twist_fractions), "sensor": self.sensor.value,
+                    "grasp_objects": list(self.grasp_objects)}
+        if not self.closed_loop:
+            for name in CLOSED_LOOP_FIELDS:
+                document.pop(name)
+        return document
+
+
+CLOSED_LOOP_FIELDS = ("closed_loop", "grasp_trials", "grasp_objects", "grasp_seed", "plant_spread",
+                      "calibration_size_contact", "calibration_size_base")
 
 
 def design_id(design: FingertipDesign, study: DesignStudy) -> str:

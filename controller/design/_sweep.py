@@ -60,6 +60,9 @@ def _record_problem(record: dict, case: _Case) -> str | None:
         return "increments is not a list of rows of numbers"
     if not isinstance(record.get("timings", {}), dict):
         return "timings is not a table"
+    grasp = record.get("grasp", {})
+    if not isinstance(grasp, dict) or not all(isinstance(value, str) for value in grasp.values()):
+        return "grasp is not a table of texts"
     return None
 
 

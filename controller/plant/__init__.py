@@ -1,8 +1,9 @@
 """Plant: what makes the data a controller reads - the gripper actuator, the closed loop's fingertip as built (FEM
 sensor plane, capacitive arrays, named errors against the design), its sensor bench, and a closed-form Hertz
-fingertip; may import controller.sensing, never estimation or control (docs/design.md, sec. 9: truth and belief
-apart)."""
+fingertip, of the shipped design or of any design calibrated on its own FEM (``PlantModel``); may import
+controller.sensing, never estimation or control (docs/design.md, sec. 9: truth and belief apart)."""
 
+from ._model import PlantModel, nominal_model
 from .actuator import ActuatorParameters, ActuatorPlant, contact_force
 from .bench_rig import BenchLoad, rig_states, run_bench
 from .fingertip_plant import FACTOR_LIMIT, FingertipPlant, PlantFactors, SensorPlane, plant_mechanics
@@ -10,4 +11,4 @@ from .hertz_plant import ClosedFormContactPlant, HertzFingertip
 
 __all__ = ["ActuatorParameters", "ActuatorPlant", "contact_force", "ClosedFormContactPlant", "HertzFingertip",
            "FingertipPlant", "PlantFactors", "SensorPlane", "plant_mechanics", "BenchLoad", "rig_states", "run_bench",
-           "FACTOR_LIMIT"]
+           "FACTOR_LIMIT", "PlantModel", "nominal_model"]

@@ -3,8 +3,9 @@ hardware spread, and named errors of the build against the nominal design (``Pla
 
 What it is made of (the truth side of docs/design.md, sec. 9; nothing here is handed to an estimator):
 
-* mechanics: the FEM-calibrated bump laws of ``contact.reduced`` (``ReducedFingertip.calibrated()``), with the build's
-  gel stiffness and bump height;
+* mechanics: the FEM-calibrated bump laws of the design (``PlantModel``: by default the shipped 3x3 fingertip's
+  packaged ``ReducedFingertip.calibrated()``; any design calibrated on its own FEM by ``PlantModel.from_fit``), with
+  the build's gel stiffness and bump height;
 * sensor plane: each bump's base pressure from the FEM of the design (``contact.reduced.base_response``: per-bump
   influence fields, a response surface in P_i, Q_i and the spin torque), with the build's kernel width and couple arm;
 * array: the paper's 11 x 13 capacitive nodes at 3 mm (``capacitive_array``: pads with gaps, saturating curve,
@@ -43,6 +44,8 @@ import numpy as np
 from controller.sensing import CapacitiveNode, SensorArray, capacitive_array, cell_force_operator
 from controller.sensing._node_kernel import node_law
 from fem.validation import check_range
+
+from ._model import PlantModel, nominal_model
 
 __all__ = ["PlantFactors", "FingertipPlant", "SensorPlane", "FACTOR_LIMIT", "STRETCH_LEVELS", "plant_mechanics"]
 
@@ -121,25 +124,13 @@ class PlantFactors:
         return {name: getattr(self, name) for name in self.names() if getattr(self, name) != 0.0}
 
 
-@functools.lru_cache(maxsize=4)
-def _nominal():
-    """The nominal design's FEM-calibrated mechanics and FEM sensor-plane response (packaged with contact.reduced)."""
-    from contact.reduced import ReducedFingertip
-    from contact.reduced.base_response import BaseResponse
-
-    mechanics = ReducedFingertip.calibrated()
-    response = BaseResponse.load()
-    if response.design != mechanics.design:
-        raise ValueError("the packaged base response and the calibrated bump laws are of different designs")
-    return mechanics, response
-
-
-def plant_mechanics(factors: PlantFactors = PlantFactors()):
-    """The build's bump laws: the FEM-calibrated ``ReducedFingertip`` with the gel's E and the bumps' height of
-    ``factors`` (k_n, G*, G_t and the contact radius; the module docstring's table)."""
+def plant_mechanics(factors: PlantFactors = PlantFactors(), model: PlantModel | None = None):
+    """The build's bump laws: the FEM-calibrated ``ReducedFingertip`` of ``model`` (default the shipped 3x3,
+    ``nominal_model()``) with the gel's E and the bumps' height of ``factors`` (k_n, G*, G_t and the contact radius;
+    the module docstring's table)."""
     from contact.reduced import ReducedFingertip
 
-    nominal = _nominal()[0]
+    nominal = (nominal_model() if model is None else model).mechanics
     p = nominal.parameters
     e_modulus, e_height = factors.youngs_modulus, factors.bump_height
     return ReducedFingertip(nominal.design, replace(
@@ -154,11 +145,11 @@ def _array_key(array: SensorArray) -> tuple:
 
 
 @functools.lru_cache(maxsize=64)
-def _stretched_tables(array_key: tuple, stretch: float) -> dict:
-    """Pad-force tables of the nominal response with every bump's field stretched by 1 + ``stretch`` about its
+def _stretched_tables(model: PlantModel, array_key: tuple, stretch: float) -> dict:
+    """Pad-force tables of the model's response with every bump's field stretched by 1 + ``stretch`` about its
     centre (the field's force kept): a field at nodes c + s (x - c) with values p / s^2 integrates to the same force
     over the stretched triangles."""
-    _, response = _nominal()
+    response = model.response
     pitch, counts, centre, fill = array_key
     array = SensorArray(pitch=pitch, node_counts=counts, centre=centre, fill_factor=fill)
     scale = 1.0 + stretch
@@ -185,12 +176,19 @@ class FingertipPlant:
     seed : int -- draws the arrays' baselines and drifts of the day and the build's node-gain error (node_gain).
     build : int -- draws the arrays' node gains: the physical pair of arrays (the bench calibrates build 0).
     plane : SensorPlane -- FEM (default) or MODEL (module docstring; the array is then ideal cells).
+    model : PlantModel, optional -- the design's calibrated bump laws and FEM base response (default: the shipped
+        3x3 fingertip, ``nominal_model()``; any design: ``PlantModel.from_fit``).
     """
 
     def __init__(self, factors: PlantFactors = PlantFactors(), array: SensorArray | None = None,
-                 noise: float | None = None, seed: int = 0, plane: SensorPlane = SensorPlane.FEM, build: int = 0):
+                 noise: float | None = None, seed: int = 0, plane: SensorPlane = SensorPlane.FEM, build: int = 0,
+                 model: PlantModel | None = None):
         if not isinstance(factors, PlantFactors):
             raise ValueError(f"factors={factors!r} must be PlantFactors")
+        if model is not None and not isinstance(model, PlantModel):
+            raise ValueError(f"model={model!r} must be a PlantModel (e.g. PlantModel.from_fit(fit_fingertip(...)))")
+        self.model = nominal_model() if model is None else model
+        self.array_design = array             # the array as designed (None: the default), before noise and plane
         try:
             self.plane = SensorPlane(plane)
         except ValueError:
@@ -208,8 +206,8 @@ class FingertipPlant:
             node = replace(node, noise_floor=noise * node.capacitance_per_area / node.dielectric_modulus)
             array = replace(array, node=node)
         self.factors, self.array, self.node = factors, array, node
-        self.mechanics = plant_mechanics(factors)
-        self.response = _nominal()[1]
+        self.mechanics = plant_mechanics(factors, self.model)
+        self.response = self.model.response
         # the build's arrays (their node gains) are one physical pair, calibrated on the bench as it is; the
         # baselines, their drift and the build's extra gain error (node_gain) are the day's: drawn from ``seed``
         built = [node.realize(array.shape, np.random.default_rng([build, finger, 0x4255494C44])) for finger in range(2)]
@@ -259,8 +257,8 @@ class FingertipPlant:
         index = int(np.clip(np.searchsorted(STRETCH_LEVELS, stretch, side="right") - 1, 0, STRETCH_LEVELS.size - 2))
         low, high = STRETCH_LEVELS[index], STRETCH_LEVELS[index + 1]
         weight = (stretch - low) / (high - low)
-        below = _stretched_tables(key, float(low))
-        above = _stretched_tables(key, float(high)) if weight > 0.0 else below
+        below = _stretched_tables(self.model, key, float(low))
+        above = _stretched_tables(self.model, key, float(high)) if weight > 0.0 else below
         arm = (1.0 + self.factors.couple_arm) * (1.0 + self.factors.bump_height)
         tables = {name: (1.0 - weight) * below[name] + weight * above[name] for name in below}
         tables["shear"] = arm * tables["shear"]
