@@ -33,6 +33,7 @@ ON_CONE = 1e-8       # relative distance to the friction cone within which a tri
 # their residual within 2-5 iterations.
 STAGNATION_ITERATIONS = 12
 STAGNATION_FACTOR = 0.5
+FORCE_FLOOR = 1e-300   # N: keeps the residual's scale positive before any point carries a force
 
 
 class ContactNotConverged(RuntimeError):
@@ -122,7 +123,15 @@ def solve_increment(compliance: SurfaceCompliance, gap0: np.ndarray, lever: np.n
     target_normal = control.normal_force
     target_tangential = None if control.tangential_force is None else np.asarray(control.tangential_force, float)
     target_torque = control.torque
-    force_scale = max(abs(target_normal or 0.0), float(previous.normal_force.sum()), 1e-12)
+    # the residual is a force [N] relative to the load the contact carries: the normal force target, the last
+    # converged force or (``scale()``, for a press by depth from no contact) the present iterate's, never a floor
+    # alone (a press by depth from rest measured its residual against 1e-12 N and stalled at 1e-5 x 1e-12 N of
+    # round-off, far above any tolerance)
+    force_scale = max(abs(target_normal or 0.0), float(previous.normal_force.sum()))
+
+    def scale() -> float:
+        """Force scale [N] of the residual: ``force_scale``, or the iterate's total normal force if larger."""
+        return max(force_scale, float(np.maximum(lam, 0.0).sum()), FORCE_FLOOR)
 
     lam = previous.normal_force.copy()
     tan = previous.tangential_force.copy()
@@ -154,7 +163,7 @@ def solve_increment(compliance: SurfaceCompliance, gap0: np.ndarray, lever: np.n
             body.extend((tan.sum(axis=0) - target_tangential)[shift_components])
         if angle_free:
             body.append((lever * tan).sum() - target_torque)
-        return float(np.linalg.norm(np.concatenate(parts + [np.asarray(body)]))) / force_scale
+        return float(np.linalg.norm(np.concatenate(parts + [np.asarray(body)]))) / scale()
 
     history: list[float] = []
     for iteration in range(1, max_iterations + 1):
@@ -277,7 +286,7 @@ def solve_increment(compliance: SurfaceCompliance, gap0: np.ndarray, lever: np.n
                     keys, states = keys[kept], states[kept]
                     guess = rotate_slip_guess(guess, kept, eliminated, direction[eliminated])
                 # the linear residual [N] enters the next Newton residual: keep it a tenth of the tolerance
-                solution = linear_solver.solve(jac, rhs, keys, states, guess, 0.1 * tolerance * force_scale)
+                solution = linear_solver.solve(jac, rhs, keys, states, guess, 0.1 * tolerance * scale())
         except np.linalg.LinAlgError as error:
             raise ContactNotConverged(f"singular Newton system at iteration {iteration} ({error})", history) from None
         if kept is not None:

@@ -7,7 +7,9 @@ time a point enters contact and reused by every later Newton iteration, incremen
 
 Columns are also kept on disk (``ColumnCache``), keyed by the mesh, the material, the element formulation, the
 candidate points and the package version: a re-run, a resumed sweep or another load path on the same fingertip
-reads them instead of solving again (the columns are 60-90 % of a contact path's time on 50k-230k DOF).
+reads them instead of solving again (the columns are 60-90 % of a contact path's time on 50k-230k DOF). A stored
+set that does not read back whole or does not fit the compliance it is loaded for is reported once with its path and
+computed again (``fem.cache_dir``).
 """
 
 from __future__ import annotations
@@ -20,9 +22,9 @@ from pathlib import Path
 import numpy as np
 
 from fem.atomic import atomic_path
+from fem.cache_dir import default_cache_dir, discard_damaged, writable_folder
 from fem.elasticity import ElasticModel
 from fem.linear_solver import SaddlePointFactorization, SpdFactorization
-from fem.mesh_cache import default_cache_dir
 
 __all__ = ["SurfaceCompliance", "ColumnCache", "compliance_cache_key", "package_version",
            "MAX_CACHED_BYTES"]
@@ -74,22 +76,50 @@ class ColumnCache:
     def path(self, key: str) -> Path:
         return self.directory / f"compliance-{key}.npz"
 
-    def load(self, key: str) -> tuple[np.ndarray, np.ndarray] | None:
-        """(columns, values) stored under ``key``, None when absent or unreadable (then computed and written again)."""
-        try:
-            with np.load(self.path(key), allow_pickle=False) as data:        # absent: FileNotFoundError (OSError)
-                columns, values = data["columns"], data["values"]
-                return columns.astype(np.int64), values.astype(float)
-        except (OSError, KeyError, ValueError):
+    def load(self, key: str, rows: int | None = None) -> tuple[np.ndarray, np.ndarray] | None:
+        """(columns, values) stored under ``key``, None when absent. A file that does not read back whole (a bad
+        CRC, truncated, not an npz) or does not fit (``rows`` rows of the compliance it is for; column indices
+        unique and in range; finite values) is reported, deleted and None returned: the columns are computed and
+        written again."""
+        path = self.path(key)
+        if not path.is_file():
             return None
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                columns, values = np.array(data["columns"]), np.array(data["values"])
+        except Exception as error:             # zipfile.BadZipFile ("Bad CRC-32"), EOFError, OSError, KeyError, ...
+            discard_damaged(path, f"{type(error).__name__}: {error}")
+            return None
+        problem = _column_set_problem(columns, values, rows)
+        if problem:
+            discard_damaged(path, problem)
+            return None
+        return columns.astype(np.int64), values.astype(float)
 
     def save(self, key: str, columns: np.ndarray, values: np.ndarray) -> Path | None:
-        """Write the columns (skipped above MAX_CACHED_BYTES); returns the path, or None when skipped."""
-        if values.nbytes > MAX_CACHED_BYTES:
+        """Write the columns (skipped above MAX_CACHED_BYTES, or when the folder cannot be written: one warning);
+        returns the path, or None when skipped."""
+        if values.nbytes > MAX_CACHED_BYTES or not writable_folder(self.directory):
             return None
         with atomic_path(self.path(key)) as temporary, open(temporary, "wb") as stream:
             np.savez(stream, columns=np.asarray(columns, dtype=np.int64), values=values)
         return self.path(key)
+
+
+def _column_set_problem(columns: np.ndarray, values: np.ndarray, rows: int | None) -> str | None:
+    """What is wrong with a stored column set (flat indices ``columns`` (c,), ``values`` (rows, c)), or None."""
+    if columns.ndim != 1 or not np.issubdtype(columns.dtype, np.integer):
+        return f"column indices of shape {columns.shape} and type {columns.dtype}, not a list of integers"
+    if values.ndim != 2 or not np.issubdtype(values.dtype, np.floating) or values.shape[1] != columns.size:
+        return f"values of shape {values.shape} and type {values.dtype} for {columns.size} columns"
+    if rows is not None and values.shape[0] != rows:
+        return f"{values.shape[0]} rows where this compliance has {rows}"
+    if columns.size and (columns.min() < 0 or columns.max() >= values.shape[0]
+                         or np.unique(columns).size != columns.size):
+        return f"column indices outside [0, {values.shape[0]}) or repeated"
+    if not np.isfinite(values).all():
+        return "non-finite values"
+    return None
 
 
 class SurfaceCompliance:

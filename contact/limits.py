@@ -8,7 +8,7 @@ Before meshing (``check_scene_limits``, ``check_resources``), from closed-form e
   finite-strain gel (``contact.envelope``, per quantity: normal force and contact radius up to a contact width a/R,
   tangential and torsional compliance, stick ratio and the base pressure's centre up to a load ratio) warns;
 - size: the tets, DOF and memory of the mesh the settings ask for (``fem.mesh.size_cells``), refused when the
-  estimate exceeds the memory this machine has available.
+  estimate exceeds the machine's physical memory, a warning when it exceeds what is free at that instant.
 While solving (``check_increment_limits``), on each converged increment: the computed depth against the thickness
 (same thresholds), its contact width and load ratios against the small-strain envelope (a warning per quantity), and,
 for a sphere, the distance a contact point has slid against the contact radius (the gap is paired at the start:
@@ -28,7 +28,8 @@ from contact.envelope import outside_envelope
 from contact.scene import BodyShape, GelShape, LoadKind, Scene, Volumetric
 
 __all__ = ["PhysicalLimitError", "PhysicalLimitWarning", "check_scene_limits", "check_increment_limits",
-           "check_resources", "estimate_resources", "contact_centers", "estimated_contact", "fine_depth",
+           "check_resources", "estimate_resources", "machine_memory", "available_memory", "contact_centers",
+           "estimated_contact", "fine_depth", "fine_zone",
            "SMALL_STRAIN_WARN", "SMALL_STRAIN_REFUSE", "CONTACT_WIDTH_REFUSE", "SLIDING_WARN",
            "SLIDING_REFUSE"]
 
@@ -98,6 +99,13 @@ def estimated_contact(scene: Scene) -> tuple[float, float]:
         return flat + math.sqrt(2.0 * scene.gel.geometry.edge_radius * indentation), indentation
     half_diagonal = 0.5 * math.hypot(scene.gel.width, scene.gel.depth)
     return half_diagonal, depth or 1e-3 * scene.gel.thickness
+
+
+def fine_zone(scene: Scene) -> tuple[float, bool]:
+    """Radius [mm] of the fine-element zone around each first contact (``mesh.fine_radius``, else 1.3 x the
+    estimated contact radius + 2 h) and whether the scene is solved on its mirror half."""
+    fine_radius = scene.mesh.fine_radius or (1.3 * estimated_contact(scene)[0] + 2.0 * scene.mesh.size_contact)
+    return fine_radius, scene.contact.symmetry == "auto" and scene.mirror_symmetric
 
 
 FINE_DEPTH_FRACTION = 0.5     # fine zone depth / contact radius: Hertz's largest shear stress lies at 0.48 a
@@ -253,19 +261,34 @@ def _check_envelope(scene: Scene, number: int, result, warned: set) -> None:
                       PhysicalLimitWarning, stacklevel=4)
 
 
-def _available_memory() -> float | None:
-    """Bytes of memory available to a new allocation (MemAvailable on Linux), None where unknown."""
+def _meminfo(field: str) -> float | None:
+    """A /proc/meminfo field [bytes] (Linux), None where unknown."""
     try:
         with open("/proc/meminfo") as stream:
             for line in stream:
-                if line.startswith("MemAvailable:"):
+                if line.startswith(f"{field}:"):
                     return float(line.split()[1]) * 1024.0
     except OSError:
         pass
+    return None
+
+
+def _sysconf_pages(name: str) -> float | None:
     try:
-        return float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_AVPHYS_PAGES"))
+        return float(os.sysconf("SC_PAGE_SIZE") * os.sysconf(name))
     except (ValueError, OSError, AttributeError):
         return None
+
+
+def machine_memory() -> float | None:
+    """Bytes of physical memory of this machine (MemTotal), None where unknown: what a solve can never exceed."""
+    return _meminfo("MemTotal") or _sysconf_pages("SC_PHYS_PAGES")
+
+
+def available_memory() -> float | None:
+    """Bytes available to a new allocation at this instant (MemAvailable), None where unknown: other processes
+    change it from one second to the next, so it only warns, never refuses."""
+    return _meminfo("MemAvailable") or _sysconf_pages("SC_AVPHYS_PAGES")
 
 
 def estimate_resources(scene: Scene, fine_radius: float, half: bool) -> dict:
@@ -304,12 +327,16 @@ def estimate_resources(scene: Scene, fine_radius: float, half: bool) -> dict:
 
 
 def check_resources(scene: Scene, fine_radius: float, half: bool) -> dict:
-    """Refuse (PhysicalLimitError) a mesh whose estimated memory exceeds what this machine has available."""
+    """Refuse (PhysicalLimitError) a mesh whose estimated memory exceeds this machine's physical memory; warn
+    (PhysicalLimitWarning) when it exceeds what is available at this instant (other processes hold the rest)."""
     estimate = estimate_resources(scene, fine_radius, half)
-    available = _available_memory()
+    size = (f"mesh.size_contact={scene.mesh.size_contact} mm (order {scene.mesh.order}) would make about "
+            f"{estimate['tets']:.2g} tets, {estimate['dofs']:.2g} DOF and need about {estimate['bytes'] / 1e9:.3g} GB")
+    total, available = machine_memory(), available_memory()
+    if total is not None and estimate["bytes"] > total:
+        raise PhysicalLimitError(f"{size}; this machine has {total / 1e9:.3g} GB in all: raise mesh.size_contact or "
+                                 f"mesh.size_far")
     if available is not None and estimate["bytes"] > available:
-        raise PhysicalLimitError(
-            f"mesh.size_contact={scene.mesh.size_contact} mm (order {scene.mesh.order}) would make about "
-            f"{estimate['tets']:.2g} tets, {estimate['dofs']:.2g} DOF and need about {estimate['bytes'] / 1e9:.3g} GB; "
-            f"this machine has {available / 1e9:.3g} GB available: raise mesh.size_contact or mesh.size_far")
+        warnings.warn(f"{size}; {available / 1e9:.3g} GB are free now (the estimate is 1.7-5x the measured peak): "
+                      f"the solve may swap or be stopped", PhysicalLimitWarning, stacklevel=3)
     return estimate

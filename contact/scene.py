@@ -9,7 +9,6 @@ is ``friction_coefficient`` everywhere; the old key ``mu`` is refused with the n
 from __future__ import annotations
 
 import math
-import sys
 import warnings
 from dataclasses import dataclass, field, fields
 from pathlib import Path
@@ -19,10 +18,7 @@ import numpy as np
 from fem.validation import (Choice, InputErrors, check_all, check_bool, check_integer, check_positive,
                             check_range, describe, parse_choice)
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
+from contact._toml_file import MAX_TOML_BYTES, read_toml_file  # noqa: F401  (re-exported: contact.scene's API)
 
 __all__ = ["GelSpec", "Material", "BodySpec", "ContactSpec", "MeshSettings", "Load", "LoadKind", "LoadControl",
            "GelShape", "BodyShape", "Symmetry", "Volumetric", "Scene", "load_scene", "scene_from_dict",
@@ -423,33 +419,6 @@ def _scene(name, loads, parts) -> Scene:
         return Scene(name=name, loads=loads, **parts)
     except ValueError as error:
         raise InputErrors([str(error)]) from None
-
-
-def read_toml_file(path: str | Path, what: str) -> dict:
-    """The parsed TOML document of ``path``; a missing file, a folder, a file that is not UTF-8 text or not TOML
-    raises an error (FileNotFoundError, IsADirectoryError, ValueError) naming ``what`` and the file."""
-    path = Path(path)
-    if path.is_dir():
-        raise IsADirectoryError(f"{what} {str(path)!r} is a folder, not a TOML file")
-    if not path.exists():
-        raise FileNotFoundError(f"{what} {str(path)!r} does not exist")
-    try:
-        raw = path.read_bytes()
-    except OSError as error:
-        raise OSError(f"{what} {str(path)!r} cannot be read: {error.strerror or error}") from None
-    if raw.startswith((b"\xff\xfe", b"\xfe\xff")):
-        raise ValueError(f"{what} {str(path)!r} is UTF-16 text: save it as UTF-8 (TOML files are UTF-8)")
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as error:
-        raise ValueError(f"{what} {str(path)!r} is not UTF-8 text (byte {error.start} is "
-                         f"{raw[error.start:error.start + 1]!r}): a TOML file is UTF-8 text") from None
-    if "\x00" in text:
-        raise ValueError(f"{what} {str(path)!r} holds NUL bytes: a binary file, not TOML")
-    try:
-        return tomllib.loads(text)
-    except tomllib.TOMLDecodeError as error:
-        raise ValueError(f"{what} {str(path)!r}: not valid TOML ({error})") from None
 
 
 def load_scene(path: str | Path) -> Scene:

@@ -15,7 +15,7 @@ from contact.result import (ContactResult, ContactUnderResolved, Increment, Load
 from contact.bumps import assign_bumps
 from contact.compliance import ColumnCache, SurfaceCompliance, compliance_cache_key
 from contact.limits import (PhysicalLimitError, check_increment_limits, check_resources, check_scene_limits,
-                            contact_centers, estimated_contact, fine_depth)
+                            contact_centers, estimated_contact, fine_depth, fine_zone)
 from contact.recovery import surface_triangles
 from contact.scene import Scene
 from fem.elasticity import ElasticModel, assemble_elastic_model
@@ -45,8 +45,7 @@ class Prepared:
 
 
 def _fine_radius_and_half(scene: Scene) -> tuple[float, bool]:
-    fine_radius = scene.mesh.fine_radius or (1.3 * estimated_contact(scene)[0] + 2.0 * scene.mesh.size_contact)
-    return fine_radius, scene.contact.symmetry == "auto" and scene.mirror_symmetric
+    return fine_zone(scene)
 
 
 def _gel_mesh(scene: Scene, fine_radius: float, half: bool):
@@ -184,7 +183,7 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
         if column_cache is not None:
             disk_key = compliance_cache_key(model, scene.material.E, scene.material.nu, candidates, components,
                                             prepared.half)
-            stored = column_cache.load(disk_key)
+            stored = column_cache.load(disk_key, compliance.size)
             if stored is not None:
                 compliance.preload(*stored)
         prepared.compliances[compliance_key] = compliance
@@ -274,8 +273,11 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
                                                    prepared.half)
             try:
                 column_cache.save(key, *compliance.stored())
-            except OSError as error:                 # a full or read-only cache folder must not lose the result
+            except OSError as error:                 # a full cache folder must not lose the result
                 import warnings
 
-                warnings.warn(f"compliance columns not cached ({error})", stacklevel=2)
+                from fem.cache_dir import CacheWarning
+
+                warnings.warn(f"compliance columns not cached in {str(column_cache.directory)!r} "
+                              f"({error.strerror or error})", CacheWarning, stacklevel=2)
     return result

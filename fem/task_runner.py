@@ -19,21 +19,50 @@ from typing import Callable, Iterable
 
 from fem.atomic import atomic_path
 
-__all__ = ["LOCAL", "SYNCHRONOUS", "ADDRESS_SCHEMES", "check_scheduler", "connect", "read_record", "write_record",
-           "stored_records", "set_aside", "run_tasks", "collect", "axis_points"]
+__all__ = ["LOCAL", "SYNCHRONOUS", "ADDRESS_SCHEMES", "check_scheduler", "check_connect_timeout", "connect",
+           "read_record", "write_record", "stored_records", "set_aside", "run_tasks", "collect", "axis_points", "RecordWarning", "is_scalar"]
 
 LOCAL = "local"                # a LocalCluster of worker processes on this machine
 SYNCHRONOUS = "synchronous"    # no dask: the tasks run one after another in this process
-ADDRESS_SCHEMES = ("tcp://", "tls://", "ucx://", "inproc://", "ws://", "wss://")
+ADDRESS_SCHEMES = ("tcp://",)
+# dask schemes the runner does not take, and why (a clear refusal instead of a traceback from inside dask)
+UNSUPPORTED_SCHEMES = {
+    "tls://": "needs TLS certificates (a dask Security object), which the runner does not take",
+    "wss://": "needs TLS certificates (a dask Security object), which the runner does not take",
+    "ws://": "needs the websockets transport on every worker, which the runner does not set up",
+    "ucx://": "needs UCX (ucx-py) on the scheduler and every worker",
+    "inproc://": "is an address inside one process: the runner's workers are other processes",
+}
+MAX_CONNECT_SECONDS = 3600.0
 POLL_SECONDS = 0.5             # how often the client looks for case records written by running tasks
 
 
-def check_scheduler(scheduler: str) -> str:
-    """Return ``scheduler`` if it is "local", "synchronous" or an address with a dask scheme, else raise."""
-    if scheduler not in (LOCAL, SYNCHRONOUS) and not str(scheduler).startswith(ADDRESS_SCHEMES):
-        raise ValueError(f"scheduler={scheduler!r} is not {LOCAL!r}, {SYNCHRONOUS!r} or an address like "
-                         f"'tcp://host:8786'")
+def check_scheduler(scheduler) -> str:
+    """Return ``scheduler`` if it is "local", "synchronous" or a dask address tcp://HOST:PORT, else raise ValueError
+    naming the value and what is allowed (TypeError for what is not text)."""
+    if not isinstance(scheduler, str):
+        raise TypeError(f"scheduler={scheduler!r} must be text: {LOCAL!r}, {SYNCHRONOUS!r} or 'tcp://host:8786'")
+    if scheduler in (LOCAL, SYNCHRONOUS):
+        return scheduler
+    allowed = f"allowed: {LOCAL!r}, {SYNCHRONOUS!r} or a dask scheduler address 'tcp://HOST:PORT'"
+    one_of = f"one of {LOCAL!r}, {SYNCHRONOUS!r} or a dask scheduler address 'tcp://HOST:PORT'"
+    for scheme, reason in UNSUPPORTED_SCHEMES.items():
+        if scheduler.startswith(scheme):
+            raise ValueError(f"--scheduler {scheduler!r}: {scheme} {reason}; {allowed}")
+    if not scheduler.startswith(ADDRESS_SCHEMES):
+        raise ValueError(f"--scheduler {scheduler!r} is not {one_of}")
+    host, colon, port = scheduler[len("tcp://"):].rpartition(":")
+    if not colon or not host or "/" in host or not port.isdigit() or not 1 <= int(port) <= 65535:
+        raise ValueError(f"--scheduler {scheduler!r}: an address is tcp://HOST:PORT with PORT in [1, 65535], e.g. "
+                         f"'tcp://localhost:8786'")
     return scheduler
+
+
+def check_connect_timeout(seconds) -> float:
+    """Seconds to reach a scheduler: a finite number in (0, MAX_CONNECT_SECONDS] (not inf, nan, -1 or a bool)."""
+    from fem.validation import check_range
+
+    return check_range("--connect-timeout", seconds, 0.0, MAX_CONNECT_SECONDS, "s", low_open=True)
 
 
 @contextmanager
@@ -45,6 +74,7 @@ def connect(scheduler: str = LOCAL, workers: int = 2, timeout: float = 5.0):
     within ``timeout`` seconds, else raises ConnectionError naming the address.
     """
     check_scheduler(scheduler)
+    check_connect_timeout(timeout)
     if scheduler == SYNCHRONOUS:
         yield None
         return
@@ -62,25 +92,36 @@ def connect(scheduler: str = LOCAL, workers: int = 2, timeout: float = 5.0):
         return
     try:
         client = Client(scheduler, timeout=timeout)
-    except (OSError, TimeoutError) as error:
+    except (OSError, TimeoutError, ValueError) as error:      # ValueError: an address dask cannot parse
         raise ConnectionError(f"cannot reach the dask scheduler at {scheduler!r} within {timeout:g} s ({error}); "
                               f"is it running? (dask scheduler --port ...)") from None
     with client:
         yield client
 
 
-def read_record(path: Path, required: Iterable[str] = ("case_id", "status")) -> dict | None:
+def read_record(path: Path, required: Iterable[str] = ("case_id", "status"),
+                check: Callable | None = None) -> dict | None:
     """The case record in ``path``, or None when absent, unreadable or not a record of this case (missing one of
-    ``required``, another case's id, an unknown status; e.g. ``{}``): the case then runs again."""
+    ``required``, another case's id, an unknown status, a non-string error; e.g. ``{}``; or ``check(record)``
+    names a problem): the case then runs again."""
+    return _record_and_problem(path, required, check)[0]
+
+
+def _record_and_problem(path: Path, required, check) -> tuple[dict | None, str | None]:
+    """(record, None), (None, what is wrong with the file), or (None, None) when there is no file."""
     try:
         record = json.loads(Path(path).read_text())
-    except (OSError, ValueError):
-        return None
+    except FileNotFoundError:
+        return None, None
+    except (OSError, ValueError) as error:
+        return None, f"not readable JSON ({type(error).__name__})"
     if not isinstance(record, dict) or any(key not in record for key in required):
-        return None
-    if record.get("case_id") != Path(path).stem or record.get("status") not in ("ok", "failed"):
-        return None
-    return record
+        return None, f"not a case record (needs {list(required)})"
+    if record.get("case_id") != Path(path).stem or record.get("status") not in ("ok", "failed") \
+            or not isinstance(record.get("error"), (str, type(None))):
+        return None, "another case's id, an unknown status or an error that is not text"
+    problem = check(record) if check is not None else None
+    return (None, problem) if problem else (record, None)
 
 
 def write_record(cases_dir, record: dict) -> Path:
@@ -96,15 +137,36 @@ def write_record(cases_dir, record: dict) -> Path:
     return path
 
 
-def stored_records(cases, cases_dir, retry_failed: bool = False,
-                   required: Iterable[str] = ("case_id", "status")) -> dict:
-    """{case_id: record} of the cases recorded in ``cases_dir`` (ok ones, and failed ones unless ``retry_failed``)."""
-    records = {}
+class RecordWarning(UserWarning):
+    """A stored case record that does not read back as a record of its case: skipped, the case runs again."""
+
+
+def stored_records(cases, cases_dir, retry_failed: bool = False, required: Iterable[str] = ("case_id", "status"),
+                   check: Callable | None = None) -> dict:
+    """{case_id: record} of the cases recorded in ``cases_dir`` (ok ones, and failed ones unless ``retry_failed``).
+    ``check(record, case)`` names what is wrong with a record of that case, or None. A record file that is not a
+    valid record of its case is skipped with one RecordWarning listing the files (its case runs again)."""
+    records, damaged = {}, []
     for case in cases:
-        record = read_record(Path(cases_dir) / f"{case.case_id}.json", required)
-        if record is not None and (record["status"] == "ok" or not retry_failed):
+        path = Path(cases_dir) / f"{case.case_id}.json"
+        record, problem = _record_and_problem(path, tuple(required),
+                                              None if check is None else (lambda record: check(record, case)))
+        if problem:
+            damaged.append(f"{path.name} ({problem})")
+        elif record is not None and (record["status"] == "ok" or not retry_failed):
             records[case.case_id] = record
+    if damaged:
+        import warnings
+
+        shown = "; ".join(damaged[:5]) + (f"; and {len(damaged) - 5} more" if len(damaged) > 5 else "")
+        warnings.warn(f"{len(damaged)} case record(s) in {str(cases_dir)!r} skipped, their cases run again: {shown}",
+                      RecordWarning, stacklevel=2)
     return records
+
+
+def is_scalar(value) -> bool:
+    """A plain JSON scalar a table cell can hold: a number, a string, a bool or None."""
+    return value is None or isinstance(value, (bool, int, float, str))
 
 
 def set_aside(cases, cases_dir) -> None:

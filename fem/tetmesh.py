@@ -348,7 +348,15 @@ def mesh_gel(geometry, spec: TetMeshSpec, cache_dir=None, use_cache: bool = True
     seconds = time.perf_counter() - start
     quality = _check_quality(nodes, tets, spec)
     if use_cache:
-        cache.save(key, nodes.T, tets.T, dict(payload, seconds=seconds, quality=dataclasses.asdict(quality)))
+        try:
+            cache.save(key, nodes.T, tets.T, dict(payload, seconds=seconds, quality=dataclasses.asdict(quality)))
+        except OSError as error:                   # a full disk costs the cache entry, never the mesh
+            import warnings
+
+            from fem.cache_dir import CacheWarning
+
+            warnings.warn(f"mesh not cached in {str(cache.directory)!r} ({error.strerror or error})", CacheWarning,
+                          stacklevel=2)
     with quiet_skfem():
         mesh = MeshTet(nodes.T, tets.T)
     return GelMesh(mesh, quality, seconds, False, key)

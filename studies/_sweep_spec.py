@@ -195,6 +195,10 @@ def sweep_from_dict(data: dict, base_dir: str | Path = ".", quick: bool = False,
         problems.append(f"[list] axes are zipped and need equal lengths, got {lengths}")
     for key, _ in grid + zipped:
         attempt(lambda key=key: set_dotted({}, key, None, check_only=True))
+    from contact.budget import check_case_count
+
+    count = math.prod(len(values) for _, values in grid) * (len(zipped[0][1]) if zipped else 1)
+    attempt(lambda: check_case_count(count))                 # before building them one by one
     if problems:
         raise InputErrors(problems)
     cases = _build_cases(base, grid, zipped)
@@ -325,7 +329,7 @@ def _build_cases(base: dict, grid, zipped) -> list[Case]:
                 lines = InputErrors.problems_of(error)
                 problems.extend(f"case {dict(parameters)}: {line}" for line in lines)
             continue
-        case_id = case_hash(document)
+        case_id = case_hash(scene)
         if case_id in seen:
             problems.append(f"cases {seen[case_id]} and {dict(parameters)} are the same scene: an axis repeats "
                             f"a value")
@@ -353,20 +357,31 @@ def code_version() -> str:
         return "unknown"
 
 
-def case_hash(document: dict) -> str:
-    """Id of a case: SHA-256 of its scene document (base scene + parameters; name left out, 1 and 1.0 equal) and of
-    the installed package version (``code_version()``), so that a re-run after an upgrade solves every case again
-    instead of skipping it on a record the old code wrote; the old records stay in cases/, unused. An editable
-    install changes the id only when the version in pyproject.toml is raised, not at every edit of the code."""
+def case_hash(scene) -> str:
+    """Id of a case: SHA-256 of its physical case and of the installed package version (``code_version()``).
+
+    The physical case is the validated Scene, not the text that made it: defaults filled in, 1 and 1.0 alike, a
+    load given as one value or a list of one alike, shear directions as unit vectors ([2, 0] is [1, 0]), the name
+    left out; so two spellings of one case are solved once. The version makes a re-run after an upgrade solve every
+    case again instead of skipping it on a record the old code wrote (the old records stay in cases/, unused). An
+    editable install changes the id only when the version in pyproject.toml is raised, not at every edit."""
+    identity = dataclasses.asdict(scene)
+    identity.pop("name", None)
+    for load in identity["loads"]:
+        norm = math.hypot(*load["direction"])
+        load["direction"] = [float(f"{component / norm:.12g}") for component in load["direction"]]
+
     def canonical(value):
         if isinstance(value, dict):
-            return {k: canonical(v) for k, v in value.items() if k != "name" or value is not document}
-        if isinstance(value, list):
+            return {str(k): canonical(v) for k, v in value.items()}
+        if isinstance(value, (list, tuple)):
             return [canonical(v) for v in value]
-        if isinstance(value, int) and not isinstance(value, bool):
+        if isinstance(value, str):                # enum members (str subclasses) as their text
+            return str(value.value) if hasattr(value, "value") else value
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
             return float(value)
         return value
 
-    text = json.dumps({"scene": canonical(document), "version": code_version()}, sort_keys=True,
+    text = json.dumps({"scene": canonical(identity), "version": code_version()}, sort_keys=True,
                       separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()[:16]

@@ -3,6 +3,10 @@
 A trial is known by a key made of its object, its settings and a hash of the closed loop's sources (``trial_key``): a
 re-run with the same jobs reads the rows already in ``NAME_trials.csv`` and runs only the missing ones; after an edit
 of the controller or the fingertip model, or with other settings, every trial runs again. Rows are kept in job order.
+
+Every row carries ``row_check``, a digest of its own values: a row read back whose digest does not match (a
+truncated line, an edited or bit-flipped value, a row of another shape) is skipped with one warning naming the file,
+and its trial runs again; a file that is not CSV text at all is reported the same way and rebuilt.
 """
 
 from __future__ import annotations
@@ -11,6 +15,7 @@ import csv
 import functools
 import hashlib
 import json
+import warnings
 from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
@@ -49,11 +54,38 @@ def trial_key(obj, settings, extra: str = "") -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
+CHECK = "row_check"
+
+
+def row_check(row: dict) -> str:
+    """Digest (16 hex digits) of a row's values as the CSV holds them (None and "" alike), ``row_check`` left out."""
+    items = sorted((name, "" if value is None else str(value)) for name, value in row.items() if name != CHECK)
+    text = "\x1f".join(f"{name}\x1e{value}" for name, value in items if value != "")
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
 def _read(path: Path) -> dict[str, dict]:
+    """The rows of an earlier run by key; rows that fail their ``row_check`` are skipped, with one TrialRowWarning
+    naming the file (and the whole file when it is not CSV text)."""
     if not path.is_file():
         return {}
-    with path.open(newline="") as stream:
-        return {row["key"]: row for row in csv.DictReader(stream) if row.get("key")}
+    try:
+        with path.open(newline="", encoding="utf-8") as stream:
+            rows = list(csv.DictReader(stream))
+    except (UnicodeDecodeError, csv.Error, OSError) as error:
+        warnings.warn(f"trial table {str(path)!r} cannot be read ({type(error).__name__}: {error}): its trials run "
+                      f"again and the file is rebuilt", TrialRowWarning, stacklevel=3)
+        return {}
+    valid = {row["key"]: row for row in rows
+             if None not in row and None not in row.values() and row.get("key") and row.get(CHECK) == row_check(row)}
+    if len(valid) < len(rows):
+        warnings.warn(f"trial table {str(path)!r}: {len(rows) - len(valid)} of {len(rows)} row(s) damaged (truncated, "
+                      f"edited or of another shape): skipped, their trials run again", TrialRowWarning, stacklevel=3)
+    return valid
+
+
+class TrialRowWarning(UserWarning):
+    """Rows of a trial table that do not read back as written are skipped (and their trials run again)."""
 
 
 def run_trial_table(path: Path, jobs: list[tuple[str, object, object, dict]], row: Callable[[object, dict], dict],
@@ -68,9 +100,9 @@ def run_trial_table(path: Path, jobs: list[tuple[str, object, object, dict]], ro
     """
     from controller.closed_loop import map_trials, run_trial
 
-    done = _read(path)
     keys = [job[0] for job in jobs]
-    rows = {key: coerce(done[key]) for key in keys if key in done}
+    written = {key: row for key, row in _read(path).items() if key in set(keys)}   # as on disk: their checks hold
+    rows = {key: coerce(value) for key, value in written.items()}
     missing = [job for job in jobs if job[0] not in rows]
     if missing:
         results = map_trials(functools.partial(_with_required_force, function or run_trial),
@@ -78,22 +110,27 @@ def run_trial_table(path: Path, jobs: list[tuple[str, object, object, dict]], ro
         for index, (result, required) in results:
             key, _, _, info = missing[index]
             rows[key] = {"key": key, **row(result, {**info, "required": required})}
-            write_csv_atomic(path, [rows[k] for k in keys if k in rows])     # after every trial: nothing is lost
+            rows[key][CHECK] = row_check(rows[key])
+            written[key] = rows[key]
+            write_csv_atomic(path, [written[k] for k in keys if k in written])     # after every trial: nothing lost
     return [rows[key] for key in keys]
 
 
 def _with_required_force(function: Callable, obj, settings) -> tuple:
-    # the slip limit (a third of a second each) is found in the workers, with the trial, and only for missing rows
+    # the slip limit (a third of a second each) is found in the workers, with the trial, and only for missing rows;
+    # of the trial's own build (its plant factors change the bump laws)
     from controller.closed_loop import required_grip_force
+    from controller.plant import plant_mechanics
 
-    return function(obj, settings), required_grip_force(obj, settings.friction_coefficient)
+    return function(obj, settings), required_grip_force(obj, settings.friction_coefficient,
+                                                        plant_mechanics(settings.plant))
 
 
 def coerce(row: dict) -> dict:
     """Numbers and booleans back from a CSV row's strings (values computed in this run pass unchanged)."""
     out = {}
     for name, value in row.items():
-        if not isinstance(value, str) or name == "key":
+        if not isinstance(value, str) or name in ("key", CHECK):
             out[name] = value
         elif value in ("True", "False"):
             out[name] = value == "True"
@@ -103,3 +140,78 @@ def coerce(row: dict) -> dict:
             except ValueError:
                 out[name] = value
     return out
+
+
+def add_plant_arguments(parser) -> None:
+    """The closed-loop studies' options on the plant the controller does not know (docs/design.md, sec. 9)."""
+    parser.add_argument("--plant-spread", type=float, default=None, metavar="E",
+                        help="each plant factor uniform in +-E per trial (default 0.1; 0: the nominal build)")
+    parser.add_argument("--plant", default=None, metavar="NAME=E,...",
+                        help="fixed plant factors instead (kernel_width, couple_arm, youngs_modulus, bump_height, "
+                             "node_gain, friction_anisotropy; relative errors, e.g. couple_arm=0.15)")
+    parser.add_argument("--sensor-plane", default="fem", choices=["fem", "model"],
+                        help="fem: the plant's sensor from the FEM read by capacitive nodes (default); model: the "
+                             "estimator's own model read by ideal cells (the known world of earlier rounds)")
+
+
+def plant_options(plant_spread=None, plant=None, sensor_plane="fem") -> dict:
+    """Checked options of ``add_plant_arguments`` as keywords of ``trial_settings``."""
+    from controller.closed_loop import PLANT_SPREAD
+    from controller.plant import FACTOR_LIMIT, PlantFactors, SensorPlane
+
+    spread = PLANT_SPREAD if plant_spread is None else plant_spread
+    if isinstance(spread, bool) or not isinstance(spread, (int, float)) or not 0.0 <= spread <= FACTOR_LIMIT:
+        raise ValueError(f"--plant-spread={plant_spread!r} must be a number in [0, {FACTOR_LIMIT}]")
+    factors = None if plant is None else (plant if isinstance(plant, PlantFactors) else PlantFactors.parse(plant))
+    try:
+        plane = SensorPlane(sensor_plane)
+    except ValueError:
+        raise ValueError(f"--sensor-plane={sensor_plane!r} is not one of {[p.value for p in SensorPlane]}") from None
+    return dict(plant_spread=float(spread), plant=factors, sensor_plane=plane)
+
+
+def plant_description(options: dict) -> str:
+    """A figure title's words for ``plant_options``: sensor plane, plant factors and the friction range."""
+    from controller.closed_loop import FRICTION_RANGE
+
+    fixed = options["plant"].nonzero() if options["plant"] is not None else None
+    plant = ("nominal plant" if fixed == {} else
+             "plant " + ", ".join(f"{name} {100 * value:+.0f} %" for name, value in fixed.items()) if fixed
+             else f"plant factors +-{100 * options['plant_spread']:.0f} %")
+    return (f"{options['sensor_plane'].value} sensor plane, {plant}, "
+            f"mu {FRICTION_RANGE[0]:g}-{FRICTION_RANGE[1]:g}")
+
+
+def trial_settings(rng, plant_spread: float, plant=None, sensor_plane="fem", **fixed):
+    """A randomised trial (``random_settings``: friction 0.2-1.2, jitter, noise, plant factors within
+    +-``plant_spread``), with ``plant`` (fixed factors) in place of the drawn ones if given. The draws are the
+    same whatever the plant options, so the same seed gives the same objects, frictions and jitter."""
+    from dataclasses import replace
+
+    from controller.closed_loop import random_settings
+
+    settings = random_settings(rng, plant_spread=plant_spread, **fixed)
+    if plant is not None:
+        settings = replace(settings, plant=plant)
+    return replace(settings, sensor_plane=sensor_plane)
+
+
+def outcome_columns(result, required: float, crush_force: float) -> dict:
+    """The per-trial columns every closed-loop table shares: outcome, held-still measures, the friction estimate and
+    whether the trial could be held at all (its slip limit below the object's crush force)."""
+    import math
+
+    settings = result.settings
+    columns = dict(outcome=result.outcome, success=result.success, dropped=result.dropped, crushed=result.crushed,
+                   rotated=result.rotated, feasible=bool(required < crush_force),
+                   hold_slip_mm=result.hold_slip_mm, hold_rotation_mrad=result.hold_rotation_mrad,
+                   max_rotation_mrad=result.max_rotation_mrad,
+                   creep_after_friction_um_per_s=result.creep_after_friction_um_per_s,
+                   friction_estimate=result.friction_estimate,
+                   friction_estimate_error=result.friction_estimate / settings.friction_coefficient - 1.0
+                   if math.isfinite(result.friction_estimate) else math.nan,
+                   slips_detected=len(result.slip_events),
+                   first_slip=result.slip_events[0][2] if result.slip_events else "",
+                   sensor_plane=settings.sensor_plane.value)
+    columns.update({f"plant_{name}": value for name, value in vars(settings.plant).items()})
+    return columns

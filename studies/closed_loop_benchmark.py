@@ -105,7 +105,13 @@ def run(out_dir, quick: bool = False, repeats: int = 3, trials: int | None = Non
     summary["hold_force_difference_reference"] = max(abs(d["hold_force_mean"] / r["hold_force_mean"] - 1.0)
                                                 for d, r in zip(default, reference))
     summary["throughput"] = _throughput(TABLE_I_OBJECTS, base, trials, random_settings, run_trials)
+    # one trial is serial (MuJoCo's step and the compiled loop use one thread; CPU time is what is measured), so the
+    # thread pools do not change it: they are stated, and the throughput above is 1 and 2 processes side by side
+    from studies._threads import describe_threads, thread_settings
+
+    summary["thread_settings"] = thread_settings()
     write_json_atomic(out_dir / f"{NAME}.json", summary)
+    print(f"{NAME}: threads: {describe_threads(summary['thread_settings'])}")
     print(f"{NAME}: one trial at the default rates: {summary['real_time_factor_median']:.1f}x real time per CPU second "
           f"(target {TARGET_REAL_TIME_FACTOR:g}x), {summary['cost_over_floor_median']:.2f} x the bare mj_step floor, "
           f"{summary['speedup_over_reference']:.1f}x faster than at {REFERENCE_RATE / 1e3:g} kHz, hold forces within "

@@ -1,6 +1,6 @@
 """Fingertip design sweep (FEM -> sensor -> estimator, resumable, on dask): python -m studies design FILE --out DIR.
 
-The design file lists fingertip designs and the study they go through (format: controller/_design_file.py; example:
+The design file lists fingertip designs and the study they go through (format: controller/design/_file.py; example:
 studies/designs/array_size_and_stiffness.toml); ``controller.design.design_sweep`` does the work. Writes
 DIR/cases/<id>.json as each design finishes, DIR/design.parquet and DIR/design.csv (one typed row per design: its
 parameters, every metric, status, timings), DIR/design_increments.parquet (one row per design, path and increment)
@@ -30,69 +30,87 @@ def add_arguments(parser) -> None:
 
 
 def _check_out_dir(out_dir: Path, spec) -> dict:
-    """The identity of this sweep; refuse an --out that holds another one (other name or axes)."""
+    """The identity of this sweep; refuse an --out that holds another one (other name or axes). An unreadable
+    design.json (a killed write, an edit) is not another sweep: it is reported and written again; the case records
+    are known by design, study and version, so none of them is mistaken for this sweep's."""
+    import warnings
+
     identity = {"name": spec.name, "axes": sorted(spec.axes)}
     previous = out_dir / f"{NAME}.json"
     if previous.exists():
         try:
             stored = json.loads(previous.read_text())
             stored = {"name": stored["name"], "axes": sorted(stored["axes"])}
-        except (OSError, ValueError, KeyError, TypeError):
-            stored = None
+        except (OSError, ValueError, KeyError, TypeError) as error:
+            warnings.warn(f"{str(previous)!r} is unreadable ({type(error).__name__}): written again from this sweep",
+                          stacklevel=2)
+            stored = identity
         if stored != identity:
-            raise ValueError(f"--out {str(out_dir)!r} holds another design sweep ({stored or 'unreadable design.json'}"
-                             f"; this one is {identity}): choose another --out, or delete that folder")
+            raise ValueError(f"--out {str(out_dir)!r} holds another design sweep ({stored}; this one is "
+                             f"{identity}): choose another --out, or delete that folder")
     return identity
 
 
 def write_tables(records: list[dict], out_dir: Path) -> None:
     """design.parquet, design.csv and design_increments.parquet from the records so far (atomically)."""
     from controller.design import design_table, increment_table
+
+    _write(design_table(records), increment_table(records), out_dir)
+
+
+def _write(designs, increments, out_dir: Path) -> None:
     from fem.atomic import atomic_path
 
-    for name, table in ((NAME, design_table(records)), (f"{NAME}_increments", increment_table(records))):
+    for name, table in ((NAME, designs), (f"{NAME}_increments", increments)):
         with atomic_path(out_dir / f"{name}.parquet") as temporary:
             table.to_parquet(temporary, index=False)
     with atomic_path(out_dir / f"{NAME}.csv") as temporary:
-        design_table(records).to_csv(temporary, index=False)
+        designs.to_csv(temporary, index=False)
 
 
 def run(out_dir, quick: bool = False, design_file: Path | None = None, scheduler: str = "local", workers: int = 2,
-        connect_timeout: float = 5.0, retry_failed: bool = False, quiet: bool = False) -> dict:
-    """Run (or resume) the design sweep; tables, Pareto figure; returns counts and the wall time."""
-    from controller.design import DESIGN_COLUMNS, design_sweep, pareto_front
-    from fem.task_runner import check_scheduler
+        connect_timeout: float = 5.0, retry_failed: bool = False, quiet: bool = False, max_hours: float = 12.0,
+        force: bool = False) -> dict:
+    """Run (or resume) the design sweep; tables, Pareto figure; returns counts and the wall time. Refused before any
+    solve: a bad flag or design file, designs past the resource limits (unless ``force``), an --out that holds
+    another sweep or another live run."""
+    from controller.design import DESIGN_COLUMNS, design_id, design_sweep, load_design_file, pareto_front
+    from fem.run_lock import hold_out_dir
+    from studies.run import check_writable
+    from studies.sweep import check_runner_flags
 
     if design_file is None:
         raise ValueError("design needs a design file: python -m studies design DESIGN.toml --out DIR")
-    check_scheduler(scheduler)
-    from controller.design import load_design_file
-
+    check_runner_flags(scheduler, workers, connect_timeout, max_hours)
     spec = load_design_file(design_file, quick=quick)        # every design validated before anything runs
     import pyarrow  # noqa: F401  (fail now, not after the solves, if the Parquet writer is missing)
 
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    out_dir = check_writable(Path(out_dir))
     identity = _check_out_dir(out_dir, spec)
-    write_json_atomic(out_dir / f"{NAME}.json", {**identity, "source": spec.source, "description": spec.description,
-                                                 "grid": {k: list(v) for k, v in spec.grid},
-                                                 "list": {k: list(v) for k, v in spec.zipped},
-                                                 "study": spec.study.document(), "designs": len(spec.designs)})
     start = time.perf_counter()
-    arrived = []
+    with hold_out_dir(out_dir, f"design sweep {spec.name!r}"):
+        write_json_atomic(out_dir / f"{NAME}.json", {**identity, "source": spec.source,
+                                                     "description": spec.description,
+                                                     "grid": {k: list(v) for k, v in spec.grid},
+                                                     "list": {k: list(v) for k, v in spec.zipped},
+                                                     "study": spec.study.document(), "designs": len(spec.designs)})
+        # the tables hold every design of this file recorded on disk, whichever run computed it: a resumed run that
+        # is killed while writing them leaves the earlier designs in, not only its own
+        known: dict = {}
+        order = {design_id(design, spec.study): number for number, design in enumerate(spec.designs)}
 
-    def on_record(record):
-        arrived.append(record)
-        write_tables(arrived, out_dir)                     # the tables are always complete up to the last design
+        def on_record(record):
+            known[record["case_id"]] = record
+            write_tables(sorted(known.values(), key=lambda r: order[r["case_id"]]), out_dir)
 
-    table = design_sweep(spec.designs, spec.study, out_dir=out_dir, scheduler=scheduler, workers=workers,
-                         connect_timeout=connect_timeout, retry_failed=retry_failed, progress=not quiet,
-                         on_record=on_record)
-    records = [json.loads((out_dir / "cases" / f"{case_id}.json").read_text()) for case_id in table["case_id"]]
-    write_tables(records, out_dir)
-    front = pareto_front(table, OBJECTIVES)
-    seconds = time.perf_counter() - start
-    save_figure(plot_pareto(table, front, spec.name, spec.axes or DESIGN_COLUMNS[:3]), out_dir, NAME)
+        table, increments = design_sweep(spec.designs, spec.study, out_dir=out_dir, scheduler=scheduler,
+                                         workers=workers, connect_timeout=connect_timeout, retry_failed=retry_failed,
+                                         progress=not quiet, on_record=on_record, on_stored=known.update,
+                                         with_increments=True, force=force, max_hours=max_hours)
+        _write(table, increments, out_dir)
+        front = pareto_front(table, OBJECTIVES)
+        seconds = time.perf_counter() - start
+        save_figure(plot_pareto(table, front, spec.name, spec.axes or DESIGN_COLUMNS[:3]), out_dir, NAME)
     failed = int((table["status"] != "ok").sum())
     print(f"{NAME}: {len(table)} designs, {failed} failed, {int(front.sum())} on the Pareto front; {seconds:.1f} s")
     for _, row in table[front].iterrows():

@@ -4,10 +4,12 @@
 on the sensor), and the friction the incipient-slip controller measures in hand, through grasp, lift, hold (where
 it probes the force down until the first bump slides, then steps it up), place and release.
 (b) The paper's claim: without rotational slip detection the grasp force is not enough. The eclair (104 g,
-39 mN m) and the horizontal bottle, each in randomised trials (friction 0.4-1.0, grasp jitter, misalignment,
-sensor noise), with and without rotational detection (without it the controller sees only the translational part
-of the bumps' load ratios). Outcomes are counted apart: held, turned out of the grasp (> 0.15 rad), dropped (touched
-the table in the hold: under-grip) and crushed (over-grip; the eclair's crush force is 10 N).
+39 mN m) and the horizontal bottle, each in randomised trials of the protocol (friction 0.2-1.2, plant factors
+within +-10 %, grasp jitter, misalignment, sensor noise; the held-out seed), with and without rotational detection
+(without it the controller sees only the translational part of the bumps' load ratios). Outcomes are counted
+apart: held, turned out of the grasp (> 0.15 rad), dropped (touched the table in the hold: under-grip) and crushed
+(over-grip; the eclair's crush force is 10 N). Every trial runs against the FEM sensor plane read by capacitive
+nodes (``--sensor-plane model``: the known world).
 Outputs: fig10.csv (time series of (a) and of the eclair pair at mu = 0.4, 10 Hz as the paper records),
 fig10_trials.csv (one row per trial of (b), resumable), fig10.png/pdf.
 """
@@ -20,7 +22,8 @@ from pathlib import Path
 import numpy as np
 
 from studies._output import save_figure, write_csv_atomic
-from studies._trials import check_trials, run_trial_table, trial_key
+from studies._trials import (add_plant_arguments, check_trials, outcome_columns, plant_options, run_trial_table,
+                             trial_key, trial_settings)
 
 NAME = "fig10"
 FRICTION = 0.6                  # (a) bottle
@@ -34,40 +37,44 @@ def add_arguments(parser) -> None:
     parser.add_argument("--trials", type=int, default=None, help=f"trials per object and setting (default {TRIALS}, "
                                                                   "quick 2)")
     parser.add_argument("--processes", type=int, default=None, help="worker processes (default: every CPU)")
+    add_plant_arguments(parser)
+
+
+LABELS = {"held": "held", "turned_out": "turned out", "dropped": "dropped", "crushed": "crushed"}
 
 
 def outcome(result) -> str:
-    """'crushed', 'dropped', 'turned out' or 'held' (in that order of precedence)."""
-    if result.crushed:
-        return "crushed"
-    if result.dropped:
-        return "dropped"
-    return "turned out" if result.rotated else "held"
+    """'crushed', 'dropped', 'turned out' or 'held' (``TrialResult.outcome``, as a label)."""
+    return LABELS[result.outcome]
 
 
 def _row(result, info) -> dict:
+    columns = outcome_columns(result, info["required"], info["crush_force"])
+    columns["outcome"] = outcome(result)
     return dict(object=info["object"], rotational_detection=info["rotation"], trial=info["trial"],
-                friction_coefficient=result.settings.friction_coefficient, outcome=outcome(result),
-                success=result.success, max_rotation_mrad=result.max_rotation_mrad,
+                friction_coefficient=result.settings.friction_coefficient, **columns,
                 hold_force_settled=result.hold_force_settled, max_force=result.max_force,
-                required_force=info["required"], friction_estimate=result.friction_estimate)
+                required_force=info["required"])
 
 
-def run(out_dir, quick: bool = False, trials: int | None = None, processes: int | None = None) -> dict:
+def run(out_dir, quick: bool = False, trials: int | None = None, processes: int | None = None,
+        plant_spread: float | None = None, plant: str | None = None, sensor_plane: str = "fem") -> dict:
     """(a) one bottle trial; (b) randomised trials with and without rotational detection; CSVs and figure."""
-    from controller.closed_loop import TABLE_I_OBJECTS, TrialSettings, random_settings, run_trials
+    from controller.closed_loop import HELD_OUT_SEED, TABLE_I_OBJECTS, TrialSettings, run_trials
 
     out_dir = Path(out_dir)
     trials = (2 if quick else TRIALS) if trials is None else trials
     check_trials(trials)
+    options = plant_options(plant_spread, plant, sensor_plane)
     hold = 2.0 if quick else 4.0
+    plane = options["sensor_plane"]
     series_settings = {"bottle": ("bottle_horizontal", TrialSettings(friction_coefficient=FRICTION, hold_time=hold,
-                                                                     seed=3)),
+                                                                     seed=3, sensor_plane=plane)),
                        "eclair_with_rotation": ("eclair", TrialSettings(friction_coefficient=ECLAIR_FRICTION,
-                                                                        hold_time=hold, seed=3)),
+                                                                        hold_time=hold, seed=3, sensor_plane=plane)),
                        "eclair_without_rotation": ("eclair", TrialSettings(
                            friction_coefficient=ECLAIR_FRICTION, hold_time=hold, seed=3,
-                           rotational_slip_detection=False))}
+                           rotational_slip_detection=False, sensor_plane=plane))}
     series = {}
     for index, result in run_trials([(TABLE_I_OBJECTS[name], s) for name, s in series_settings.values()],
                                     processes):
@@ -82,15 +89,15 @@ def run(out_dir, quick: bool = False, trials: int | None = None, processes: int 
                              friction_estimate=trace["friction_estimate"][i], object_rotation=trace["rotation"][i],
                              object_height_m=trace["object_height_m"][i]))
     write_csv_atomic(out_dir / f"{NAME}.csv", rows)
-    rng = np.random.default_rng(10)
+    rng = np.random.default_rng(HELD_OUT_SEED + 10)
     jobs = []
     for name in OBJECTS:
         obj = TABLE_I_OBJECTS[name]
         for trial in range(trials):
-            base = random_settings(rng, hold_time=hold, place=False)
+            base = trial_settings(rng, **options, hold_time=hold, place=False)
             for rotation in (True, False):
                 settings = replace(base, rotational_slip_detection=rotation)
-                info = dict(object=name, rotation=rotation, trial=trial)
+                info = dict(object=name, rotation=rotation, trial=trial, crush_force=obj.crush_force)
                 jobs.append((trial_key(obj, settings), obj, settings, info))
     trial_rows = run_trial_table(out_dir / f"{NAME}_trials.csv", jobs, _row, processes, label=NAME)
     counts = _counts(trial_rows)
@@ -173,7 +180,8 @@ def _plot(series, counts):
     bars.set_xticks(range(len(keys)), [f"{name.replace('_', ' ')}\n{'with' if rotation else 'without'} rotation"
                                        for name, rotation in keys], fontsize=8)
     bars.set_ylabel("trials")
-    bars.set_title("(b) randomised trials (friction 0.4-1.0, jitter, noise): outcomes", fontsize=10)
+    bars.set_title("(b) randomised trials (friction 0.2-1.2, plant factors +-10 %, jitter, noise): outcomes",
+                   fontsize=10)
     bars.legend(fontsize=8, ncol=4)
     fig.suptitle("Fig. 10: closed-loop grasp (MuJoCo + reduced 3x3 fingertip, incipient-slip controller)")
     fig.tight_layout()

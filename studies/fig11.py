@@ -1,11 +1,12 @@
 """Fig. 11 (closed loop, MuJoCo): the grasp force the controller settles at against tau_min from constant-force trials.
 
 A box (200 x 70 x 70 mm, as the horizontal bottle) of three masses, grasped at three distances from its centre of
-mass (the moment about the fingertip normal), each case with several trials of randomised friction (0.4-1.0), grasp
-jitter, misalignment and sensor noise. In each trial the incipient-slip controller lifts and holds the box (4 s): tau
-is its grip over the last second of the hold. tau_min is that trial's own minimum grasp force, found the way the
-paper does - constant-force trials (lift, then 1 s of hold) with the same friction, jitter, noise and seed - from a
-bracket seen to fail and hold (searched from the controller's grip in steps of 25 %), by bisection to 2 %
+mass (the moment about the fingertip normal), each case with several trials of the protocol (friction 0.2-1.2,
+plant factors within +-10 %, grasp jitter, misalignment, sensor noise; the held-out seed). In each trial the
+incipient-slip controller lifts and holds the box (4 s): tau is its grip over the last second of the hold. tau_min is
+that trial's own minimum grasp force, found the way the paper does - constant-force trials (lift, then 1 s of hold)
+with the same friction, jitter, noise, seed and plant (the same perturbed build) - from a bracket seen to fail and
+hold (searched from the controller's grip in steps of 25 %), by bisection to 2 %
 (``controller.closed_loop.minimum_grip_force``; the model's slip limit is not used, only reported). A trial is
 held when the box neither touches the table nor turns out of the grasp.
 Outputs: fig11.csv (one row per trial, written as each finishes; a re-run skips the trials already there),
@@ -19,7 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from studies._output import save_figure
-from studies._trials import check_trials, run_trial_table, trial_key
+from studies._trials import (add_plant_arguments, check_trials, outcome_columns, plant_options, run_trial_table,
+                             trial_key, trial_settings)
 
 NAME = "fig11"
 SIZE = (0.200, 0.070, 0.070)          # m, the horizontal bottle
@@ -32,6 +34,7 @@ CLOSE_MEAN, CLOSE_MAX = 1.3, 1.5      # the issue's 'close to tau_min': mean and
 def add_arguments(parser) -> None:
     parser.add_argument("--trials", type=int, default=None, help=f"trials per case (default {TRIALS}, quick 1)")
     parser.add_argument("--processes", type=int, default=None, help="worker processes (default: every CPU)")
+    add_plant_arguments(parser)
 
 
 def cases(quick: bool) -> list[tuple[float, float]]:
@@ -54,31 +57,32 @@ def trial_and_minimum(obj, settings) -> dict:
 
 def _row(value, info) -> dict:
     result = value["result"]
-    held = bool(result.success and not result.rotated)
+    held = result.outcome == "held"
     tau = result.hold_force_settled
     return dict(case=info["case"], trial=info["trial"], mass_kg=info["mass"], lever_mm=1e3 * info["lever"],
                 moment_nmm=info["mass"] * 9.81 * info["lever"] * 1e3,
-                friction_coefficient=result.settings.friction_coefficient, held=held, dropped=result.dropped,
-                rotated=result.rotated, max_rotation_mrad=result.max_rotation_mrad, tau=tau,
+                friction_coefficient=result.settings.friction_coefficient, held=held,
+                **outcome_columns(result, info["required"], np.inf), tau=tau,
                 tau_min=value["tau_min"], tau_min_failing=value["tau_min_failing"],
                 ratio=tau / value["tau_min"] if held else np.nan, model_limit=info["required"],
-                friction_estimate=result.friction_estimate, slips_detected=len(result.slip_events),
                 bisection_trials=value["bisection_trials"])
 
 
-def run(out_dir, quick: bool = False, trials: int | None = None, processes: int | None = None) -> dict:
+def run(out_dir, quick: bool = False, trials: int | None = None, processes: int | None = None,
+        plant_spread: float | None = None, plant: str | None = None, sensor_plane: str = "fem") -> dict:
     """Controller trial and tau_min per trial; CSV and figure."""
-    from controller.closed_loop import GraspObject, random_settings
+    from controller.closed_loop import HELD_OUT_SEED, GraspObject
 
     out_dir = Path(out_dir)
     trials = (1 if quick else TRIALS) if trials is None else trials
     check_trials(trials)
-    rng = np.random.default_rng(11)
+    options = plant_options(plant_spread, plant, sensor_plane)
+    rng = np.random.default_rng(HELD_OUT_SEED + 11)
     jobs = []
     for mass, lever in cases(quick):
         obj = GraspObject(f"box_{mass:g}kg_{1e3 * lever:g}mm", mass, SIZE, lever, 0.035)
         for trial in range(trials):
-            settings = random_settings(rng, place=False, hold_time=4.0)
+            settings = trial_settings(rng, **options, place=False, hold_time=4.0)
             info = dict(case=obj.name, trial=trial, mass=mass, lever=lever)
             jobs.append((trial_key(obj, settings, "tau_min"), obj, settings, info))
     rows = run_trial_table(out_dir / f"{NAME}.csv", jobs, _row, processes, label=NAME,
@@ -127,7 +131,8 @@ def _plot(rows):
     axes[1].axhline(CLOSE_MAX, color="k", linestyle=":", linewidth=1, label=f"max {CLOSE_MAX}")
     axes[1].axhline(CLOSE_MEAN, color="k", linestyle="--", linewidth=1, label=f"mean {CLOSE_MEAN}")
     axes[0].set_ylabel("grasp force per finger [N]")
-    axes[0].set_title("Fig. 11: tau against the trial's own tau_min (friction 0.4-1.0, jitter, noise)", fontsize=10)
+    axes[0].set_title("Fig. 11: tau against the trial's own tau_min (friction 0.2-1.2, plant factors +-10 %, jitter, "
+                      "noise)", fontsize=10)
     axes[1].set_ylabel("tau / tau_min (red: not held)")
     labels = [f"{r['mass_kg']:g} kg\n{r['moment_nmm']:.0f} N mm" for r in
               (next(r for r in rows if r["case"] == name) for name in names)]

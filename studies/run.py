@@ -2,8 +2,9 @@
 
 Usage: ``python -m studies run studies/scenes/hcm1.toml --out results/hcm1 [--vtu] [--quiet]``.
 
-Nothing is lost and nothing stale survives: ``--out`` is checked writable before the solve, the outputs of an
-earlier run in it are removed first, and a run that fails (a load the contact cannot carry, a contact too small for
+Nothing is lost and nothing stale survives: ``--out`` is checked writable before the solve and held by this run
+(a second run into it at the same time is refused, ``fem.run_lock``), the outputs of an earlier run in it are
+removed first, and a run that fails (a load the contact cannot carry, a contact too small for
 the mesh, Newton not converging, a mesh that fails its check) still writes result.json with ``status = "failed"``,
 the error and every increment converged before it (and steps.csv, and the VTU files if asked).
 """
@@ -127,18 +128,22 @@ def run(out_dir, quick: bool = False, scene: Path | None = None, vtu: bool = Fal
     if quick:
         problem = dataclasses.replace(problem, mesh=dataclasses.replace(
             problem.mesh, size_contact=max(problem.mesh.size_contact, 0.25)))
-    out_dir = prepare_out_dir(out_dir)
-    try:
-        result = solve_scene(problem, progress=not quiet)
-    except (PathNotCompleted, LoadNotCarried, ContactUnderResolved) as error:
-        write_outputs(error.result, out_dir, vtu)
-        raise
-    except Exception as error:              # before any increment (mesh, memory, limits): the error on disk too
-        write_json_atomic(out_dir / "result.json", {"scene": problem.name, "status": "failed", "mesh": {},
-                                                    "timings": {}, "left_out": [],
-                                                    "error": f"{type(error).__name__}: {error}", "increments": []})
-        raise
-    write_outputs(result, out_dir, vtu)
+    from fem.run_lock import hold_out_dir
+
+    with hold_out_dir(check_writable(out_dir), f"run {problem.name!r}"):      # one run per --out at a time
+        out_dir = prepare_out_dir(out_dir)
+        try:
+            result = solve_scene(problem, progress=not quiet)
+        except (PathNotCompleted, LoadNotCarried, ContactUnderResolved) as error:
+            write_outputs(error.result, out_dir, vtu)
+            raise
+        except Exception as error:          # before any increment (mesh, memory, limits): the error on disk too
+            write_json_atomic(out_dir / "result.json", {"scene": problem.name, "status": "failed", "mesh": {},
+                                                        "timings": {}, "left_out": [],
+                                                        "error": f"{type(error).__name__}: {error}",
+                                                        "increments": []})
+            raise
+        write_outputs(result, out_dir, vtu)
     if not quiet:
         for row in step_rows(result):
             print(f"  {row['increment']:2d} {row['load_kind']:6s} P={row['normal_force']:.4g} N "

@@ -48,6 +48,20 @@ def pytest_terminal_summary(terminalreporter, exitstatus, config):
             + f". To install the tested versions: pip install -e '.[all]' -c {CONSTRAINTS.name}", red=True)
 
 
+REFERENCE_MACHINE = {"machine_memory": 16e9, "available_memory": 8e9}   # bytes: physical, free
+
+
+@pytest.fixture(autouse=True)
+def reference_machine(monkeypatch):
+    """Every test sees the same machine, 16 GB with 8 GB free: no outcome depends on the free memory at one instant
+    (the memory refusals of contact.limits and contact.budget read these two functions)."""
+    import contact.limits
+
+    for name, value in REFERENCE_MACHINE.items():
+        monkeypatch.setattr(contact.limits, name, lambda value=value: value)
+    return REFERENCE_MACHINE
+
+
 @pytest.fixture
 def failing_after_press(monkeypatch):
     """Make every Newton solve after the press fail, as a stalled increment would (bisection cannot rescue it)."""

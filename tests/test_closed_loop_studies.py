@@ -37,17 +37,25 @@ def _rows(path):
         return list(csv.DictReader(stream))
 
 
-def test_table1_quick_succeeds_resumes_and_reports_intervals(tmp_path, monkeypatch):
-    from controller.closed_loop import _batch
+def test_table1_quick_counts_outcomes_resumes_and_reports_intervals(tmp_path, monkeypatch):
+    # one held-out trial per object: whether it holds is the study's finding, not this test's (a lucky draw); the
+    # summary must count the rows' outcomes and give the Wilson interval of that count
+    from controller.closed_loop import OUTCOMES, _batch
     from studies import table1
 
     summary = table1.run(tmp_path, quick=True, trials=1, processes=1)
     rows = _rows(tmp_path / "table1.csv")
-    assert len(rows) == 3 and all(row["success"] == "True" for row in rows)
-    for entry in summary["objects"].values():
-        low, high = entry["success_interval"]
-        assert entry["success"] == "1/1" and 0.0 < low < 0.25 and high == pytest.approx(1.0)   # Wilson, n = 1
-    assert summary["dropped"] == summary["crushed"] == 0
+    assert len(rows) == 3 and {row["object"] for row in rows} == set(summary["objects"])
+    for row in rows:
+        entry = summary["objects"][row["object"]]
+        held = row["outcome"] == "held"
+        assert row["outcome"] in OUTCOMES and row["success"] == str(held)
+        assert entry["success"] == f"{int(held)}/1" and sum(entry[outcome] for outcome in OUTCOMES) == 1
+        low, high = entry["success_interval"]                                  # Wilson, n = 1, z = 1.96
+        assert (0.0 < low < 0.25 and high == pytest.approx(1.0)) if held else (low == 0.0 and 0.75 < high < 1.0)
+        assert (row["feasible"] == "True") == (float(row["required_force"]) < float(row["crush_force"]))
+    for outcome in ("dropped", "crushed", "turned_out"):
+        assert summary[outcome] == sum(row["outcome"] == outcome for row in rows)
     ran = []
     monkeypatch.setattr(_batch, "_call", lambda *args: ran.append(args) or (_ for _ in ()).throw(AssertionError))
     again = table1.run(tmp_path, quick=True, trials=1, processes=1)            # every trial is in the CSV
@@ -80,9 +88,9 @@ def test_fig10_quick_counts_outcomes_apart(tmp_path):
 
 @pytest.mark.parametrize("trials", [0, 1.5, True])
 def test_closed_loop_studies_refuse_bad_trial_counts(tmp_path, trials):
-    from studies import fig10, fig11, table1
+    from studies import fig10, fig11, robustness, table1
 
-    for study in (table1, fig10, fig11):
+    for study in (table1, fig10, fig11, robustness):
         with pytest.raises(ValueError, match=f"trials={trials!r} must be an integer >= 1"):
             study.run(tmp_path, quick=True, trials=trials)
 
@@ -99,3 +107,31 @@ def test_batch_refuses_a_bad_process_count():
 
     with pytest.raises(ValueError, match="processes=0 must be an integer >= 1"):
         list(run_trials([(LIGHT_BOX, TrialSettings())], processes=0))
+
+
+def test_robustness_quick_counts_cells_and_friction_bands(tmp_path, monkeypatch):
+    # two cells (the nominal build and the known world), one trial per object: the summary and the friction bands must
+    # count the rows on disk, and four trials per cell cannot decide the 29/30 target
+    from studies import robustness
+    from studies._report import NOT_REPRODUCED, PARTLY, REPRODUCED, _rule_robustness
+
+    every = robustness.cells(full=False, quick=True)
+    assert {cell["cell"] for cell in every} >= {"nominal", "known_world", "all+-0.20"}
+    monkeypatch.setattr(robustness, "cells", lambda full, quick: [every[0], every[-1]])
+    summary = robustness.run(tmp_path, quick=True, trials=1, processes=1)
+    rows = _rows(tmp_path / "robustness.csv")
+    assert len(rows) == 6 and {row["cell"] for row in rows} == {"nominal", "known_world"}
+    cells = _rows(tmp_path / "robustness_summary.csv")
+    assert sum(int(cell["trials"]) for cell in cells) == 6
+    assert sum(int(cell["held"]) for cell in cells) == sum(row["outcome"] == "held" for row in rows)
+    bands = summary["friction_bands"]
+    assert sum(band["trials"] for band in bands) == 6                   # the bands partition 0.2-1.2
+    assert sum(band["held"] for band in bands) == sum(row["outcome"] == "held" for row in rows)
+    failure = 1.0 - min(float(cell["success_rate"]) for cell in cells)
+    assert summary["max_error"] == pytest.approx(failure)
+    verdict, reason = _rule_robustness(summary, rows)
+    assert verdict in (PARTLY, NOT_REPRODUCED) and "too few to decide" in reason
+    met = dict(trials_per_cell=30, single_factor_target_met=True, max_error=0.0, worst_cell="nominal",
+               worst_object="eclair", friction_bands=[])
+    assert _rule_robustness(met, [])[0] == REPRODUCED
+    assert _rule_robustness({**met, "single_factor_target_met": False, "max_error": 0.5}, [])[0] == NOT_REPRODUCED

@@ -85,8 +85,7 @@ def test_capacities_against_the_fem_press(quick_sweep):
 
     _, _, table, _ = quick_sweep
     row = table.loc[1]
-    # the plate's friction limit is mu sum lambda = mu P: per unit grasp force exactly mu (Newton tolerance 1e-10)
-    assert row["force_capacity"] == pytest.approx(QUICK.friction_coefficient, rel=1e-9)
+    # (force_capacity, mu sum lambda / P, is mu for any design under a rigid plate by equilibrium: nothing to test)
     # a symmetric array twists about its centre at full slip: T = mu sum lambda_j |r_j| about the centre, computed
     # here without the minimisation. The minimum over the twist centre cannot exceed that; an unstructured mesh is
     # symmetric only to its element size and moves the centre off by a little, the torque by second order of it
@@ -101,14 +100,23 @@ def test_capacities_against_the_fem_press(quick_sweep):
     assert 0.5 * row["torque_capacity"] < row["combined_torque_capacity"] < row["torque_capacity"]
 
 
-def test_metrics_are_physical(quick_sweep):
-    _, _, table, _ = quick_sweep
+def test_stick_ratio_metrics_follow_cattaneo_mindlin_and_their_definition(quick_sweep):
+    from contact.theory import stick_ratio_translational
+
+    _, _, table, increments = quick_sweep
+    last = QUICK.load_ratios[-1]
     for _, row in table.iterrows():
-        # Cattaneo-Mindlin per bump at Q/(mu P) = 0.95: c/a = 0.37, a drop slope of 7.4; the quick mesh (h = a/2 on
-        # the 3x3 bumps) resolves c/a to +-0.5 h/a (docs/theory.md, sec. 11.1), the estimate the table reports
-        slope = (1 - 0.95) ** (1 / 3) / 0.05
-        assert abs(row["stick_ratio_drop"] - slope) <= 20.0 * row["mesh_error_estimate"] + 1.0
-        assert 0.0 < row["translational_error"] < 1.0 and row["calibrated_gain"] > 0.0
+        # the drop is c/a at the last load ratio over (1 - r), c/a the shear path's last increment (the table's own)
+        shear = increments[(increments["case_id"] == row["case_id"]) & (increments["path"] == "shear")]
+        assert row["stick_ratio_last"] == float(shear["stick_ratio"].iloc[-1])
+        assert row["stick_ratio_drop"] == pytest.approx(row["stick_ratio_last"] / (1.0 - last), rel=1e-12)
+    # one bump under the plate is a Hertz contact: Cattaneo-Mindlin at Q/(mu P) = 0.95 gives c/a = 0.368; the table's
+    # mesh estimate 0.5 h/a (theory.md 11.1) plus the Spence pre-slip of the frictional press (nu = 0.45, beta/mu =
+    # 0.09: up to 0.012, theory.md 8.3). Measured -0.069 with a bound of 0.105
+    single = table.loc[0]
+    assert single["stick_ratio_last"] == pytest.approx(float(stick_ratio_translational(last, 2)),
+                                                       abs=single["mesh_error_estimate"] + 0.012)
+    assert (table["calibrated_gain"] > 0.0).all()
 
 
 def test_estimates_are_compared_with_the_bumps_own_shear_displacement(quick_sweep):

@@ -119,11 +119,27 @@ def test_benchmark_quick_writes_medians(tmp_path):
     from studies import benchmark
 
     benchmark.run(tmp_path, quick=True)
-    medians = json.loads((tmp_path / "benchmark.json").read_text())
-    # the contact path contains the compliance columns and Newton on top of the shared factorization
-    assert medians["contact_path"] > 0 and medians["linear_solve"] > 0
-    assert medians["ratio_contact_to_linear"] == pytest.approx(medians["contact_path"] / medians["linear_solve"],
-                                                               rel=1e-9)
+    summary = json.loads((tmp_path / "benchmark.json").read_text())
+    # the thread settings are stated, and one thread and the default are timed side by side
+    assert set(summary["thread_settings"]["environment"]) == {"MKL_NUM_THREADS", "OMP_NUM_THREADS",
+                                                              "OPENBLAS_NUM_THREADS", "NUMBA_NUM_THREADS"}
+    assert list(summary["threads"]) == ["1 thread", "default threads"]
+    for medians in summary["threads"].values():
+        assert medians["contact_path"] > 0 and medians["linear_solve"] > 0
+        assert medians["ratio_contact_to_linear"] == pytest.approx(medians["contact_path"] / medians["linear_solve"],
+                                                                   rel=1e-9)
+
+
+def test_thread_limit_reaches_every_pool_and_is_lifted_after():
+    from threadpoolctl import threadpool_info
+
+    from studies._threads import limited_threads, thread_settings
+
+    before = thread_settings()["pools"]
+    with limited_threads(1):
+        assert {pool["internal_api"]: pool["num_threads"] for pool in threadpool_info()} == dict.fromkeys(
+            thread_settings()["pools"], 1)
+    assert thread_settings()["pools"] == before or set(before) < set(thread_settings()["pools"])
 
 
 def test_benchmark_substeps_quick_follows_the_same_path(tmp_path):
@@ -131,8 +147,9 @@ def test_benchmark_substeps_quick_follows_the_same_path(tmp_path):
 
     from studies import benchmark
 
-    benchmark.run(tmp_path, quick=True, substeps=True)
+    benchmark.run(tmp_path, quick=True, substeps=True, threads="default")
     summary = json.loads((tmp_path / "benchmark_substeps.json").read_text())
+    assert list(summary["threads"]) == ["default threads"] and "environment" in summary["thread_settings"]
     with open(tmp_path / "benchmark_substeps.csv") as stream:
         rows = {row["remember_substeps"]: row for row in csv.DictReader(stream)}
     # remembered sub-steps never split more coarsely than bisection found necessary, so they take at least as many
@@ -140,19 +157,21 @@ def test_benchmark_substeps_quick_follows_the_same_path(tmp_path):
     # where bisection took a coarser later step the path differs by its discretisation: 1.5e-4 of the largest
     # torque measured on this mesh, 1e-3 allowed (a different solution would differ by the twist's own size)
     assert summary["largest_torque_difference"] <= 1e-3 * summary["largest_torque"]
-    assert summary["ratio"] == pytest.approx(summary["wall_remembered"] / summary["wall_bisected"], rel=1e-9)
+    timed = summary["threads"]["default threads"]
+    assert timed["ratio"] == pytest.approx(timed["wall_remembered"] / timed["wall_bisected"], rel=1e-9)
 
 
 def test_benchmark_factorizations_quick_agree(tmp_path):
     from studies import benchmark
 
-    summary = benchmark.run(tmp_path, quick=True, factorizations=True)
+    result = benchmark.run(tmp_path, quick=True, factorizations=True, threads="1")
     stored = json.loads((tmp_path / "benchmark_factorizations.json").read_text())
-    assert stored["nodal-average saddle point"]["factor_nonzeros"] == summary["nodal-average saddle point"][
-        "factor_nonzeros"]
+    summary = result["threads"]["1 thread"]
+    assert stored["threads"]["1 thread"]["nodal-average saddle point"]["factor_nonzeros"] == summary[
+        "nodal-average saddle point"]["factor_nonzeros"]
     # the saddle-point and the condensed factorization solve the same K: cond(K) = 7e6 on this mesh at nu = 0.4999,
     # so two backward-stable solves differ by ~cond * eps = 2e-9 of the largest entry at most (observed 4e-13)
-    assert summary["saddle_point_vs_condensed_max_difference"] < 1e-8
+    assert result["saddle_point_vs_condensed_max_difference"] < 1e-8
     saddle, condensed = summary["nodal-average saddle point"], summary["nodal-average condensed K"]
     # nonzeros are deterministic, unlike times: the saddle point avoids the second-neighbour coupling of B^T B
     assert saddle["matrix_nonzeros"] < condensed["matrix_nonzeros"]

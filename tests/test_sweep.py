@@ -155,7 +155,7 @@ def test_unreachable_scheduler_names_the_address(tmp_path):
         address = f"tcp://127.0.0.1:{probe.getsockname()[1]}"
     with pytest.raises(ConnectionError, match=f"cannot reach the dask scheduler at '{address}' within 1 s"):
         run(tmp_path / "out", sweep_file=_write(tmp_path, GRID), scheduler=address, connect_timeout=1.0, quiet=True)
-    with pytest.raises(ValueError, match="scheduler='my-cluster' is not 'local'"):
+    with pytest.raises(ValueError, match="--scheduler 'my-cluster' is not one of 'local', 'synchronous' or a dask"):
         run(tmp_path / "out", sweep_file=tmp_path / "sweep.toml", scheduler="my-cluster", quiet=True)
 
 

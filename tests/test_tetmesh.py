@@ -9,6 +9,7 @@ import pytest
 
 import fem.tetmesh as tetmesh
 from fem.geometry import ArrayGeometry, BlockGeometry, FlatCapGeometry
+from fem.cache_dir import CacheWarning
 from fem.mesh_cache import CACHE_ENV_VAR, MeshCache, cache_key, default_cache_dir
 from fem.tetmesh import MeshQualityError, TetMeshSpec, mesh_gel, tetrahedralize, write_mesh_vtu
 
@@ -192,7 +193,8 @@ def test_cache_folder_and_corrupt_files(tmp_path, monkeypatch):
     key = cache_key({"a": 1.0})
     assert key != cache_key({"a": 1.0 + 1e-12}) and cache.load(key) is None
     cache.path(key).write_bytes(b"not an npz")
-    assert cache.load(key) is None                                     # unreadable: re-mesh instead of failing
+    with pytest.warns(CacheWarning, match="damaged cache entry .*mesh-"):
+        assert cache.load(key) is None                                 # unreadable: re-mesh instead of failing
     cache.save(key, np.zeros((3, 4)), np.arange(4).reshape(4, 1), {"seconds": 1.5})
     nodes, tets = cache.load(key)
     assert nodes.shape == (3, 4) and tets.shape == (4, 1) and cache.metadata(key)["seconds"] == 1.5

@@ -27,12 +27,13 @@ reversed, to the arm) through ``xfrc_applied`` by a compiled step (``_kernel``):
 
 Rates. MuJoCo steps the arm, the object and its table contact at ``PHYSICS_RATE_HZ`` (500 Hz); within each step
 the kernel sub-steps the fingers and the Acceleration Control at 8 kHz against the object's pose, and couples the
-contact to the object implicitly (backward Euler on the contact terms, so the light eclair between two stiff fingertips needs no 4 kHz
-step); a sensor frame's physics steps run in compiled code, MuJoCo's own ``mj_step`` called from it. Outcomes
-match the explicit 8 kHz loop this replaced within the tolerances of tests/test_closed_loop_kernel.py. With the
-incipient-slip controller the whole trial is one compiled call (``_fused``): per frame the sensing, the controller's
-observe and 1 kHz steps (its state in arrays, ``controller.control._slip_frame``) and the physics steps, the same
-arithmetic as the Python frame loop the displacement-target law keeps (tests/test_closed_loop_fused.py).
+contact to the object implicitly (backward Euler on the contact terms, so the light eclair between two stiff
+fingertips needs no 4 kHz step); a sensor frame's physics steps run in compiled code, MuJoCo's own ``mj_step`` called
+from it. Outcomes match the explicit 8 kHz loop this replaced within the tolerances of
+tests/test_closed_loop_kernel.py. With the incipient-slip controller the whole trial is one compiled call
+(``_fused``): per frame the sensing, the controller's observe and 1 kHz steps (the law's compiled kernels,
+``controller.control._slip_law``, on the controller's arrays) and the physics steps, the same arithmetic as the
+Python frame loop the displacement-target law keeps (tests/test_closed_loop_fused.py).
 The world is SI; the reduced model is mm, N, N mm: ``ContactBridge`` converts at one place (names carry the unit).
 Object-table contact stays MuJoCo's (elliptic cone): it only decides when the object leaves or touches the table.
 """
@@ -43,9 +44,10 @@ from ._bridge import ContactBridge
 from ._minimum import MinimumForce, holds_at, minimum_grip_force
 from ._multirate import LoopSample, MultiRateRunner, rate_ratio
 from ._sensing import SensingChain, SensorFrame
-from ._trial import (ACTUATOR_RATE_HZ, ARM_RADIUS, DESIGN_FRICTION, GRAVITY, LOOP_RATE, MM_PER_M, PHYSICS_RATE_HZ,
-                     ROTATION_LIMIT, TABLE_I_OBJECTS, TORQUE_LIMIT, ControllerKind, GraspObject, TargetDesign,
-                     TrialResult, TrialSettings, default_tip, random_settings, required_grip_force)
+from ._trial import (ACTUATOR_RATE_HZ, ARM_RADIUS, DESIGN_FRICTION, FRICTION_RANGE, GRAVITY, HELD_OUT_SEED, LOOP_RATE,
+                     MM_PER_M, OUTCOMES, PHYSICS_RATE_HZ, PLANT_SPREAD, ROTATION_LIMIT, TABLE_I_OBJECTS, TORQUE_LIMIT,
+                     TUNING_SEED, ControllerKind, GraspObject, TargetDesign, TrialResult, TrialSettings, default_tip,
+                     random_settings, required_grip_force)
 from ._world import GraspWorld, run_trial
 
 __all__ = ["GraspObject", "TABLE_I_OBJECTS", "TargetDesign", "TrialSettings", "TrialResult", "ControllerKind",
@@ -53,4 +55,5 @@ __all__ = ["GraspObject", "TABLE_I_OBJECTS", "TargetDesign", "TrialSettings", "T
            "default_processes", "MinimumForce", "holds_at", "minimum_grip_force", "random_settings",
            "required_grip_force", "default_tip", "DESIGN_FRICTION", "GRAVITY", "MM_PER_M", "PHYSICS_RATE_HZ",
            "ACTUATOR_RATE_HZ", "LOOP_RATE", "ROTATION_LIMIT", "TORQUE_LIMIT", "ARM_RADIUS", "LoopSample",
-           "MultiRateRunner", "rate_ratio"]
+           "MultiRateRunner", "rate_ratio", "FRICTION_RANGE", "PLANT_SPREAD", "OUTCOMES", "TUNING_SEED",
+           "HELD_OUT_SEED"]

@@ -13,7 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from contact.reduced import ReducedFingertip
-from controller.control.acceleration_control import AccelerationControlParameters
+from controller.control.acceleration_control import AccelerationControlParameters, ForceFeedback
 from controller.control.filters import FirstOrderLowPass
 
 from . import _kernel as K
@@ -38,10 +38,12 @@ class ContactBridge:
     acceleration : AccelerationControlParameters -- the actuator loop (its rate sets the sub-steps).
     finger_offset_m : float -- distance of each finger origin from the grasp axis at zero closing [m].
     implicit : bool -- couple the contact to the object implicitly (``_kernel``); False: explicitly, for comparison.
+    friction_anisotropy : float -- e: friction mu (1 + e) along the sensor's x, mu (1 - e) along y (the plant's).
     """
 
     def __init__(self, model, tip: ReducedFingertip, obj: GraspObject, friction_coefficient: float,
-                 acceleration: AccelerationControlParameters, finger_offset_m: float, implicit: bool = True):
+                 acceleration: AccelerationControlParameters, finger_offset_m: float, implicit: bool = True,
+                 friction_anisotropy: float = 0.0):
         import mujoco
 
         body = lambda name: mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)       # noqa: E731
@@ -62,8 +64,11 @@ class ContactBridge:
             acceleration.arm_radius, acceleration.nominal_inertia, acceleration.target_inertia,
             acceleration.target_damping, acceleration.torque_limit)
         config[K.C_DOB_GAIN] = FirstOrderLowPass(acceleration.dob_cutoff_hz, acceleration.sample_rate_hz)._gain
+        config[K.C_FORCE_OBSERVER] = float(acceleration.force_feedback is ForceFeedback.OBSERVER)
         config[K.C_USE_DOB] = 1.0
         config[K.C_IMPLICIT] = 1.0 if implicit else 0.0
+        config[K.C_ANISOTROPY] = friction_anisotropy
+        config[K.C_MAX_DEPTH] = tip.design.bump_radius
         config[K.C_SUBSTEPS], config[K.C_STEP] = round(substeps), float(model.opt.timestep)
         config[[K.C_HALF_X, K.C_HALF_Y, K.C_HALF_Z]] = 0.5 * np.asarray(obj.size) * MM_PER_M
         config[[K.C_OBJECT_BODY, K.C_ARM_BODY]] = self.object_id, self.arm_id
@@ -123,6 +128,15 @@ class ContactBridge:
     def tangential_force(self) -> np.ndarray:
         """Per-bump tangential force (2, k, 2) [N] of the bump law (without the viscous term)."""
         return self.out[:, [K.O_TANGENTIAL_X, K.O_TANGENTIAL_Y]].reshape(2, self.count, 2)
+
+    @property
+    def bump_states(self) -> np.ndarray:
+        """Per-bump states (2, k, 4) of the plant: normal force [N], tangential force (sensor frame) [N], torque
+        about the bump's axis [N mm]."""
+        states = np.empty((2, self.count, 4))
+        states[..., 0], states[..., 1:3], states[..., 3] = self.normal_force, self.tangential_force, \
+            self._field(K.O_TORQUE)
+        return states
 
     @property
     def sliding(self) -> np.ndarray:

@@ -11,7 +11,8 @@ wrench on the object and the arm in ``xfrc_applied`` for the ``mj_step`` that fo
    (1 + 1.5 tau_d d_i' / d_i), d_i' from the relative velocity (not a finite difference). The object is held at its
    pose and twist at the start of the step.
 2. Tangential contact once per step (``contact.reduced.bump_law``: Mindlin, Lubkin, elliptic combined limit) at the
-   mean normal forces of the sub-steps: each bump is anchored to the material point of the face it first touched;
+   mean normal forces of the sub-steps, with the friction along each bump's shear direction (an anisotropic surface
+   of the plant: ``_friction_along``): each bump is anchored to the material point of the face it first touched;
    the anchor's offset from the tip in the sensor plane is the elastic shear, and a bump on its friction limit
    moves its anchor so that the elastic part carries the limit load (stick is exact: a held object does not creep).
    Viscous term tau_d k_t delta' on stuck bumps, again from the relative velocity.
@@ -44,7 +45,7 @@ MM = 1000.0                        # mm per m
  C_OBJECT_MASS, C_INERTIA_X, C_INERTIA_Y, C_INERTIA_Z, C_FINGER_MASS, C_FINGER_DAMPING, C_FINGER_OFFSET,
  C_ARM_RADIUS, C_NOMINAL_INERTIA, C_TARGET_INERTIA, C_TARGET_DAMPING, C_TORQUE_LIMIT, C_DOB_GAIN, C_USE_DOB,
  C_SUBSTEPS, C_STEP, C_HALF_X, C_HALF_Y, C_HALF_Z, C_OBJECT_BODY, C_ARM_BODY, C_OBJECT_DOF, C_ARM_DOF,
- C_IMPLICIT, C_SIZE) = range(31)
+ C_IMPLICIT, C_ANISOTROPY, C_FORCE_OBSERVER, C_MAX_DEPTH, C_SIZE) = range(34)
 # --- per-bump geometry rows (2 k, 15): tip offset from the finger origin (world, mm), x_s, y_s, z_s, face sign, -----
 G_OFFSET, G_X, G_Y, G_Z, G_FACE, G_SIZE = 0, 3, 6, 9, 12, 13
 # --- per-bump state rows (2 k, 6): anchor (object frame, mm), anchor angle [rad], touching at the last step (0/1),
@@ -61,7 +62,8 @@ S_TWIST, S_APPLIED, S_SIZE = 13, 19, 25                        # previous object
 
 @njit_cached
 def acceleration_step(state, config, force_command, measured_force, angle, period):
-    """Acceleration Control with DOB (``control.acceleration_control``) on the state vector; torque [N mm]."""
+    """Acceleration Control with DOB (``control.acceleration_control``) on the state vector; torque [N mm]. The
+    force loop reads ``measured_force`` [N] (a force sensor) or, with C_FORCE_OBSERVER, the DOB's estimate / r."""
     velocity = (angle - state[S_ANGLE_1]) / period
     raw = 0.5 * (state[S_TORQUE_1] + state[S_TORQUE_2]) - config[C_NOMINAL_INERTIA] * (
         angle - 2.0 * state[S_ANGLE_1] + state[S_ANGLE_2]) / (period * period)
@@ -69,7 +71,8 @@ def acceleration_step(state, config, force_command, measured_force, angle, perio
     disturbance = gain * (raw + state[S_DOB_INPUT]) + (1.0 - 2.0 * gain) * state[S_DOB_OUTPUT]
     state[S_DOB_INPUT], state[S_DOB_OUTPUT] = raw, disturbance
     state[S_ANGLE_2], state[S_ANGLE_1] = state[S_ANGLE_1], angle
-    acceleration = (config[C_ARM_RADIUS] * (force_command - measured_force)
+    force = disturbance / config[C_ARM_RADIUS] if config[C_FORCE_OBSERVER] > 0.0 else measured_force
+    acceleration = (config[C_ARM_RADIUS] * (force_command - force)
                     - config[C_TARGET_DAMPING] * velocity) / config[C_TARGET_INERTIA]
     torque = config[C_NOMINAL_INERTIA] * acceleration + (disturbance if config[C_USE_DOB] > 0.0 else 0.0)
     limit = config[C_TORQUE_LIMIT]
@@ -128,7 +131,10 @@ def _normal_forces(config, geometry, bumps, arm, closing_mm, closing_rate_mm, po
         offset_y = arm[1] + side * (config[C_FINGER_OFFSET] - closing_mm) + geometry[i, G_OFFSET + 1] - position[1]
         face = geometry[i, G_FACE]
         depth = half_y + face * (fixed[i, 4] + rotation[1, 1] * offset_y + fixed[i, 5])       # R^T offset, y
-        if not (depth > 0.0 and abs(fixed[i, 2] + rotation[1, 0] * offset_y + fixed[i, 3]) <= half_x
+        # a tip deeper than the bump's own radius has nothing left to compress: the object is not in front of the
+        # face but met the fingertip edge-on (an object slid out of the grasp); no contact the bump law describes
+        if not (0.0 < depth <= config[C_MAX_DEPTH]
+                and abs(fixed[i, 2] + rotation[1, 0] * offset_y + fixed[i, 3]) <= half_x
                 and abs(fixed[i, 6] + rotation[1, 2] * offset_y + fixed[i, 7]) <= half_z):
             bumps[i, B_DEPTH] = 0.0
             forces[i] = 0.0
@@ -139,6 +145,18 @@ def _normal_forces(config, geometry, bumps, arm, closing_mm, closing_rate_mm, po
                                 -velocity[2] - turn_z)[1]                         # d' [mm/s]
         root = math.sqrt(depth)
         forces[i] = max(k_n * depth * root + damping * 1.5 * k_n * root * rate, 0.0)
+
+
+@njit_cached(inline="always")
+def _friction_along(friction, anisotropy, shear_x, shear_y):
+    """Friction coefficient along the bump's shear (x, y) of an anisotropic surface: the radius of the ellipse with
+    semi-axes mu (1 + e) along the sensor's x and mu (1 - e) along y in the shear's direction (mu when e = 0 or
+    without shear)."""
+    length = math.hypot(shear_x, shear_y)
+    if anisotropy == 0.0 or length == 0.0:
+        return friction
+    along_x, along_y = shear_x / (length * (1.0 + anisotropy)), shear_y / (length * (1.0 - anisotropy))
+    return friction / math.sqrt(along_x * along_x + along_y * along_y)
 
 
 @njit_cached
@@ -221,8 +239,10 @@ def physics_step(config, geometry, state, bumps, out, xpos, xmat, xipos, qvel, x
         gap_y = position[1] + anchor_y - tip_y
         gap_z = position[2] + anchor_z - tip_z
         twist = finger_angle - bumps[i, B_ANGLE]
-        law = bump_law(mean[i], gap_x * x_s[0] + gap_y * x_s[1] + gap_z * x_s[2],
-                       gap_x * y_s[0] + gap_y * y_s[1] + gap_z * y_s[2], twist, config[C_FRICTION],
+        shear_x = gap_x * x_s[0] + gap_y * x_s[1] + gap_z * x_s[2]
+        shear_y = gap_x * y_s[0] + gap_y * y_s[1] + gap_z * y_s[2]
+        law = bump_law(mean[i], shear_x, shear_y, twist,
+                       _friction_along(config[C_FRICTION], config[C_ANISOTROPY], shear_x, shear_y),
                        config[C_RADIUS_COEFFICIENT], config[C_TANGENTIAL_MODULUS], config[C_TORSIONAL_MODULUS])
         (contact_radius, q_x, q_y, torque, load_ratio, torque_ratio, stick_ratio, sliding, elastic_x, elastic_y,
          _, elastic_twist) = law
@@ -271,7 +291,8 @@ def physics_step(config, geometry, state, bumps, out, xpos, xmat, xipos, qvel, x
         out[i, O_LOAD_RATIO], out[i, O_TORQUE_RATIO], out[i, O_STICK_RATIO] = load_ratio, torque_ratio, stick_ratio
 
     if config[C_IMPLICIT] > 0.0:
-        _implicit_wrench(config, state, rotation, qvel[dof:dof + 3], spin, wrench, stiffness, viscosity, step)
+        _implicit_wrench(config, state, rotation, qvel[dof:dof + 3], spin, wrench, stiffness, viscosity, step,
+                         arm_velocity_mm / MM)
     for a in range(6):
         xfrc_applied[obj, a] = wrench[a]
         xfrc_applied[arm_body, a] = -wrench[a] if a < 3 else 0.0
@@ -290,10 +311,12 @@ def _add_row(stiffness, viscosity, row, direction, lever_x, lever_y, lever_z, sp
 
 
 @njit_cached
-def _implicit_wrench(config, state, rotation, velocity, spin, wrench, stiffness, viscosity, step):
+def _implicit_wrench(config, state, rotation, velocity, spin, wrench, stiffness, viscosity, step, arm_velocity):
     """Replace ``wrench`` by the one that makes MuJoCo's explicit step the backward-Euler step of the contact
     (module docstring); the 6 x 6 system is symmetric positive definite: Cholesky by hand, no allocation per call
-    beyond the small work arrays."""
+    beyond the small work arrays. The springs stretch with the object's motion relative to the fingers, which rise
+    with the arm (``arm_velocity`` [m/s] along z): the stiffness acts on the relative twist (on the absolute one,
+    a lifted object lagged the fingers by h v_arm and its bumps carried a spurious k h v_arm on top of its load)."""
     mass = config[C_OBJECT_MASS]
     inertia = (config[C_INERTIA_X], config[C_INERTIA_Y], config[C_INERTIA_Z])
     system = np.empty((6, 6))
@@ -305,8 +328,11 @@ def _implicit_wrench(config, state, rotation, velocity, spin, wrench, stiffness,
                                          + rotation[a, 1] * inertia[1] * rotation[b, 1]
                                          + rotation[a, 2] * inertia[2] * rotation[b, 2])
     twist = np.empty(6)
+    relative = np.empty(6)
     for a in range(3):
         twist[a], twist[3 + a] = velocity[a], spin[a]
+        relative[a], relative[3 + a] = velocity[a], spin[a]
+    relative[2] -= arm_velocity
     have_previous = state[S_HAVE_PREVIOUS] > 0.0
     right = np.empty(6)
     for a in range(6):
@@ -318,13 +344,13 @@ def _implicit_wrench(config, state, rotation, velocity, spin, wrench, stiffness,
         pushed = 0.0
         for b in range(6):
             system[a, b] = mass_matrix[a, b] + step * viscosity[a, b] + step * step * stiffness[a, b]
-            pushed += stiffness[a, b] * twist[b]
+            pushed += stiffness[a, b] * relative[b]
         right[a] = step * (other + wrench[a] - step * pushed)
     change = _cholesky_solve(system, right)
     for a in range(6):
         correction = 0.0
         for b in range(6):
-            correction += step * stiffness[a, b] * (twist[b] + change[b]) + viscosity[a, b] * change[b]
+            correction += step * stiffness[a, b] * (relative[b] + change[b]) + viscosity[a, b] * change[b]
         state[S_TWIST + a] = twist[a]
         state[S_APPLIED + a] = wrench[a] - correction
     for a in range(6):

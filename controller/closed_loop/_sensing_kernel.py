@@ -1,7 +1,8 @@
-"""Compiled form of the paper's estimator for the closed loop: per-bump force and CoP, reference, rigid fit.
+"""Compiled estimators of the closed loop (the belief side): per-bump loads read back with the estimator's own sensor
+model (``read_loads``), and the paper's estimator - per-bump force and CoP, reference, rigid fit.
 
-The same computations as ``controller.estimation.estimator.bump_positions`` (force and centre of pressure per bump
-region above a noise gate), the bench's reference table and
+The latter are the same computations as ``controller.estimation.estimator.bump_positions`` (force and centre of
+pressure per bump region above a noise gate), the bench's reference table and
 ``controller.estimation.rigid_transform.fit_rigid_transform`` (2D Procrustes), for one frame of two fingertips: the
 closed loop reads them at 100 Hz, where the vectorised library functions spend milliseconds in array set-up per frame.
 The tests check them against the library functions.
@@ -123,8 +124,8 @@ def couple_arm(bump_force, arm, slope, limit):
 
 @njit_cached
 def load_ratio_noise(load_force, threshold, couple_law, noise_std, couple_noise, out):
-    """Noise (2, k) [-] of each bump's load ratio into ``out``: the node noise ``noise_std`` [N] read back through the
-    couple, noise_std c_i / (h(P_i) P_i) for a loaded bump (P_i > ``threshold``), 0 for the others."""
+    """Noise (2, k) [-] of each bump's load ratio into ``out``: the node noise ``noise_std`` [N] (measured at rest)
+    read back through the couple, noise_std c_i / (h(P_i) P_i) for a loaded bump (P_i > ``threshold``), 0 else."""
     for f in range(load_force.shape[0]):
         for i in range(load_force.shape[1]):
             value = load_force[f, i]
@@ -136,56 +137,47 @@ def load_ratio_noise(load_force, threshold, couple_law, noise_std, couple_noise,
 
 
 @njit_cached
-def sense_loads(normal, shear, tangential, noise, couple_law, operator, inverse, offset, quantization, threshold,
-                readings, load_force, load_ratio):
-    """Readings of both fingertips and the per-bump loads read back from them (``SensingChain.sense``).
-
-    normal (2, k) [N], shear (2, k, 2) [mm], tangential (2, k, 2) [N]: the bump states; noise (2, n) [N];
-    couple_law = (h_0, kappa, h_inf, g) of ``ReducedFingertip.couple``; operator A (n, 3k), inverse A^+ (3k, n).
-    Writes readings (2, n) [N] (A theta + offset + noise, quantized), load_force (2, k) [N] and load_ratio
-    (2, k, 2) [-] = M / (h(P) P) of theta = A^+ (readings - offset), 0 where the force is at most ``threshold``.
-    """
-    count = normal.shape[1]
+def read_loads(readings, offset, couple_law, inverse, threshold, couple_force, couple_table, corrected, load_force,
+               load_ratio):
+    """The per-bump loads of both fingertips' readings (2, n) [N] (``SensingChain.sense``): ``corrected`` = readings
+    less the tared ``offset`` (2, n); theta = A^+ corrected with the estimator's model (inverse (3k, n)); the couple
+    an unsheared bump shows at its force (the bench's presses: ``couple_force`` (m,) [N], ``couple_table`` (m, k, 2)
+    [N mm], interpolated in log force) taken off; load_force (2, k) [N] and load_ratio (2, k, 2) [-] = M / (h(P) P),
+    0 where the force is at most ``threshold``; couple_law = (h_0, kappa, h_inf, g) of the estimator's arm h(P)."""
+    count = load_force.shape[1]
     theta = np.empty(3 * count)
+    zero = np.empty((count, 2))
     for f in range(2):
-        for i in range(count):
-            arm = couple_arm(normal[f, i], couple_law[0], couple_law[1], couple_law[2])
-            theta[i] = normal[f, i]
-            for axis in range(2):
-                theta[count * (1 + axis) + i] = arm * tangential[f, i, axis] + \
-                    couple_law[3] * normal[f, i] * shear[f, i, axis]
-        for node in range(operator.shape[0]):
-            value = offset + noise[f, node]
-            for j in range(3 * count):
-                value += operator[node, j] * theta[j]
-            if quantization > 0.0:
-                value = np.round(value / quantization) * quantization
-            readings[f, node] = value
+        for node in range(readings.shape[1]):
+            corrected[f, node] = readings[f, node] - offset[f, node]
         for j in range(3 * count):
             value = 0.0
-            for node in range(operator.shape[0]):
-                value += inverse[j, node] * (readings[f, node] - offset)
+            for node in range(readings.shape[1]):
+                value += inverse[j, node] * corrected[f, node]
             theta[j] = value
         for i in range(count):
+            load_force[f, i] = theta[i]
+        reference_at(load_force[f], couple_force, couple_table, zero)
+        for i in range(count):
             force = theta[i]
-            load_force[f, i] = force
             if force > threshold:
                 scale = 1.0 / (couple_arm(force, couple_law[0], couple_law[1], couple_law[2]) * force)
-                load_ratio[f, i, 0] = theta[count + i] * scale
-                load_ratio[f, i, 1] = theta[2 * count + i] * scale
+                load_ratio[f, i, 0] = (theta[count + i] - zero[i, 0]) * scale
+                load_ratio[f, i, 1] = (theta[2 * count + i] - zero[i, 1]) * scale
             else:
                 load_ratio[f, i, 0] = load_ratio[f, i, 1] = 0.0
 
 
 @njit_cached
-def sense_frame(normal, shear, tangential, noise, couple_law, operator, inverse, offset, quantization, threshold,
-                region, node_x, node_y, node_floor, centres, table_force, table_cop, cop_gain_to_shear, readings,
-                load_force, load_ratio, force, shift, fit):
-    """One sensor frame of both fingertips: ``sense_loads`` then ``estimate_frame``; returns the paper's inputs
-    (u_x [mm], theta [rad], bumps in contact on the fingertip that sees more), the larger of the two fingertips."""
-    sense_loads(normal, shear, tangential, noise, couple_law, operator, inverse, offset, quantization, threshold,
-                readings, load_force, load_ratio)
-    estimate_frame(readings, region, node_x, node_y, node_floor, threshold, centres, table_force, table_cop,
+def sense_frame(readings, offset, couple_law, inverse, threshold, couple_force, couple_table, region, node_x, node_y,
+                node_floor, centres, table_force, table_cop, cop_gain_to_shear, corrected, load_force, load_ratio,
+                force, shift, fit):
+    """One sensor frame of both fingertips' readings (2, n) [N]: ``read_loads`` then ``estimate_frame`` on the tared
+    readings; returns the paper's inputs (u_x [mm], theta [rad], bumps in contact on the fingertip that sees more),
+    the larger of the two fingertips."""
+    read_loads(readings, offset, couple_law, inverse, threshold, couple_force, couple_table, corrected, load_force,
+               load_ratio)
+    estimate_frame(corrected, region, node_x, node_y, node_floor, threshold, centres, table_force, table_cop,
                    cop_gain_to_shear, force, shift, fit)
     translation = rotation = 0.0
     contacts = 0

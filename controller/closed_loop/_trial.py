@@ -10,8 +10,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from contact.reduced import ReducedFingertip
-from controller.control.acceleration_control import AccelerationControlParameters
-from fem.validation import check_positive, check_range
+from controller.control.acceleration_control import AccelerationControlParameters, ForceFeedback
+from controller.plant.fingertip_plant import PlantFactors, SensorPlane
+from fem.validation import check_integer, check_positive, check_range
 
 GRAVITY = 9.81                      # m/s^2
 MM_PER_M = 1000.0
@@ -20,7 +21,7 @@ MM_PER_M = 1000.0
 # fingertips; at 2 kHz it rattled between the fingers and turned out).
 PHYSICS_RATE_HZ = 500.0
 ACTUATOR_RATE_HZ = 8000.0           # Acceleration Control + DOB, sub-stepped in the contact kernel (paper: 8 kHz)
-DESIGN_FRICTION = 0.4               # lowest friction the controller targets are designed for (mu range 0.4-1.0)
+DESIGN_FRICTION = 0.4               # the friction the displacement-target controller is designed for (the prior of the incipient-slip law); trials draw 0.2-1.2 (FRICTION_RANGE)
 APPROACH_GAP_M = 0.001              # initial gap between each bump tip and the object face
 LIFT_HEIGHT_M = 0.05
 GRID_SPACING = 1.0                  # mm, base-pressure grid (kernel radius >= 4.7 mm; sensor cells 3 mm)
@@ -91,15 +92,16 @@ TABLE_I_OBJECTS = {
 class TargetDesign:
     """What the controller's targets are designed for: the lowest friction expected and the load ratios
     Q / (mu P) and T / T_slip at which the bench sets u_x,ref and theta_ref. At a friction mu in full stick the
-    controller then holds about mu / (friction_coefficient load_ratio) times the least force (the displacement hardly depends
-    on mu below gross slip), which is its safety factor against an unknown surface."""
+    controller then holds about mu / (friction_coefficient load_ratio) times the least force (the displacement
+    hardly depends on mu below gross slip), which is its safety factor against an unknown surface."""
 
     friction_coefficient: float = DESIGN_FRICTION
     load_ratio: float = 0.6
     torque_ratio: float = 0.6
 
     def __post_init__(self):
-        check_range("targets.friction_coefficient", self.friction_coefficient, 0.0, math.inf, low_open=True, high_open=True)
+        check_range("targets.friction_coefficient", self.friction_coefficient, 0.0, math.inf, low_open=True,
+                    high_open=True)
         check_range("targets.load_ratio", self.load_ratio, 0.0, 1.0, low_open=True, high_open=True)
         check_range("targets.torque_ratio", self.torque_ratio, 0.0, 1.0, low_open=True, high_open=True)
 
@@ -118,7 +120,12 @@ class TrialSettings:
     controller; a number: that force throughout, for tau_min), phase durations [s], seed, what the
     controller's targets are designed for (TargetDesign), the MuJoCo / contact rate and the actuator-loop rate [Hz]
     (an integer multiple of it), whether the contact is coupled implicitly (False: explicitly, for
-    comparison) and the controller (ControllerKind; TargetDesign applies to DISPLACEMENT_TARGETS)."""
+    comparison), the controller (ControllerKind; TargetDesign applies to DISPLACEMENT_TARGETS), the build's errors
+    against the nominal fingertip (``plant``: PlantFactors, the truth side; the estimator is calibrated on a
+    nominal build and never sees them) and what makes the sensor plane (``sensor_plane``: the FEM's fields read by
+    capacitive nodes, or the estimator's own model read by ideal cells - the known world of earlier rounds) and where
+    the 8 kHz force loop reads the grip from (``force_feedback``: the actuator's reaction-force observer, as a
+    gripper without a force sensor; or a force sensor, as earlier rounds)."""
 
     friction_coefficient: float = 0.8
     grasp_offset: tuple[float, float] = (0.0, 0.0)
@@ -134,8 +141,23 @@ class TrialSettings:
     actuator_rate_hz: float = ACTUATOR_RATE_HZ
     implicit_coupling: bool = True
     controller: ControllerKind = ControllerKind.INCIPIENT_SLIP
+    plant: PlantFactors = PlantFactors()
+    sensor_plane: SensorPlane = SensorPlane.FEM
+    force_feedback: ForceFeedback = ForceFeedback.OBSERVER
 
     def __post_init__(self):
+        try:
+            object.__setattr__(self, "force_feedback", ForceFeedback(self.force_feedback))
+        except ValueError:
+            raise ValueError(f"force_feedback={self.force_feedback!r} is not one of "
+                             f"{[item.value for item in ForceFeedback]}") from None
+        if not isinstance(self.plant, PlantFactors):
+            raise ValueError(f"plant={self.plant!r} must be PlantFactors (e.g. PlantFactors(kernel_width=0.1))")
+        try:
+            object.__setattr__(self, "sensor_plane", SensorPlane(self.sensor_plane))
+        except ValueError:
+            raise ValueError(f"sensor_plane={self.sensor_plane!r} is not one of "
+                             f"{[plane.value for plane in SensorPlane]}") from None
         try:
             object.__setattr__(self, "controller", ControllerKind(self.controller))
         except ValueError:
@@ -151,6 +173,7 @@ class TrialSettings:
         if self.constant_force is not None:
             check_positive("constant_force", self.constant_force, "N")
         check_range("hold_time", self.hold_time, 0.0, 600.0, "s")
+        check_integer("seed", self.seed, 0, 2**63 - 1)               # a generator seed: 1.5 or True is no seed
         for name in ("rotational_slip_detection", "place", "implicit_coupling"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name}={getattr(self, name)!r} must be True or False")
@@ -164,17 +187,23 @@ class TrialSettings:
                              f"physics_rate_hz={self.physics_rate_hz!r}")
 
 
+OUTCOMES = ("held", "turned_out", "dropped", "crushed")
+
+
 @dataclass
 class TrialResult:
     """Trace (10 ms rows: time, phase, force command, grip force, u_x, theta, object height, slip, rotation) and
     the verdicts: dropped (object touched the table during the hold), crushed (a finger's normal force exceeded
-    the crush force), success, plus statistics: forces [N] per finger, creep [um/s] and rotation creep [mrad/s] of
-    the grasp point relative to the gripper after the first 0.5 s of the hold, the largest rotation of the object
-    in the grasp during lift and hold [mrad] and ``rotated`` (beyond ROTATION_LIMIT: it turned out of the grasp,
-    which the paper's success criterion - no table contact - does not count). ``hold_force_settled`` [N] is the
-    mean grip over the last second of the hold (the force the controller settled at: Fig. 11's tau);
-    ``friction_estimate`` and ``slip_events`` ((time [s], estimate) per detection) are the incipient-slip
-    controller's own (NaN and empty for the displacement-target law)."""
+    the crush force), ``rotated`` (beyond ROTATION_LIMIT in the grasp during lift and hold: it turned out of the
+    grasp), ``outcome`` (one of OUTCOMES, the worst that happened: crushed, dropped, turned_out, else held) and
+    ``success`` (held). Statistics: forces [N] per finger; the object's slide [mm] and rotation [mrad] in the
+    grasp over the hold (``hold_slip_mm``, ``hold_rotation_mrad``) and its largest rotation in the grasp during lift
+    and hold [mrad]; creep [um/s] and rotation creep [mrad/s] of the grasp point relative to the gripper after the
+    first 0.5 s of the hold, and creep after the controller found the friction (from its last slip event, or that
+    0.5 s, to the end of the hold: ``creep_after_friction_um_per_s``). ``hold_force_settled`` [N] is the mean grip
+    over the last second of the hold (the force the controller settled at: Fig. 11's tau); ``friction_estimate``
+    and ``slip_events`` ((time [s], estimate, kind) per detection) are the incipient-slip controller's own (NaN and
+    empty for the displacement-target law)."""
 
     object_name: str
     settings: TrialSettings
@@ -194,12 +223,18 @@ class TrialResult:
     hold_slip_mm: float = math.nan
     hold_rotation_mrad: float = math.nan
     max_rotation_mrad: float = math.nan
+    creep_after_friction_um_per_s: float = math.nan
     wall_time: float = math.nan
     simulated_time: float = math.nan
 
     @property
     def rotated(self) -> bool:
         return bool(self.max_rotation_mrad > 1e3 * ROTATION_LIMIT)
+
+    @property
+    def outcome(self) -> str:
+        """The worst that happened (OUTCOMES): crushed, dropped, turned_out, else held."""
+        return "crushed" if self.crushed else "dropped" if self.dropped else "turned_out" if self.rotated else "held"
 
     @property
     def real_time_factor(self) -> float:
@@ -216,7 +251,8 @@ class TrialResult:
 
 def required_grip_force(obj: GraspObject, friction_coefficient: float, tip: ReducedFingertip | None = None) -> float:
     """Least normal force per finger [N] that carries the object (reduced model's slip limit, two fingers sharing
-    the weight m g / 2 [N] and the moment m g lever / 2 [N mm] about the fingertip normal)."""
+    the weight m g / 2 [N] and the moment m g lever / 2 [N mm] about the fingertip normal); ``tip``: the bump laws
+    (default the nominal build's; a trial's own are ``FingertipPlant.mechanics``)."""
     tip = default_tip() if tip is None else tip
     weight_n = obj.mass * GRAVITY
     return tip.minimum_normal_force((0.0, 0.5 * weight_n), 0.5 * weight_n * obj.lever * MM_PER_M,
@@ -224,13 +260,27 @@ def required_grip_force(obj: GraspObject, friction_coefficient: float, tip: Redu
 
 
 
-def random_settings(rng, **fixed) -> TrialSettings:
-    """Randomised trial (Table I): mu in [0.4, 1.0], grasp jitter +-5 mm along x and +-1 mm in height (the 30 mm
-    eclair leaves 1.7 mm between the outer bump rows and its edges; a row off the face flickers in and out), yaw
-    misalignment +-1 deg, sensor noise 0.5-2 mN per node; ``fixed`` overrides."""
-    values = dict(friction_coefficient=float(rng.uniform(0.4, 1.0)),
+FRICTION_RANGE = (0.2, 1.2)          # the randomised friction: beyond the controller's prior on both sides
+PLANT_SPREAD = 0.1                   # the randomised plant factors: each uniform in +-10 % (node gain 0-10 %)
+# The protocol's seeds. TUNING_SEED drew the trials the incipient-slip law's parameters were tuned on (30 per Table I
+# object, friction 0.2-1.2, plant factors within +-10 %); HELD_OUT_SEED draws every study's trials (Table I, Figs.
+# 10 and 11, the robustness study): none of them was seen while tuning.
+TUNING_SEED = 101
+HELD_OUT_SEED = 7919
+
+
+def random_settings(rng, plant_spread: float = PLANT_SPREAD, friction_range=FRICTION_RANGE, **fixed) -> TrialSettings:
+    """Randomised trial (Table I): mu uniform in ``friction_range``, grasp jitter +-5 mm along x and +-1 mm in
+    height (the 30 mm eclair leaves 1.7 mm between the outer bump rows and its edges; a row off the face flickers in
+    and out), yaw misalignment +-1 deg, sensor noise 0.5-2 mN per node, every plant factor uniform in
+    +-``plant_spread`` (``PlantFactors.random``); ``fixed`` overrides. The draws come in this order from ``rng``
+    (a Generator), so a seed fixes the whole set."""
+    low, high = friction_range
+    check_range("friction_range low", low, 0.0, high, low_open=True)
+    values = dict(friction_coefficient=float(rng.uniform(low, high)),
                   grasp_offset=(float(rng.uniform(-0.005, 0.005)), float(rng.uniform(-0.001, 0.001))),
                   misalignment=float(np.radians(rng.uniform(-1.0, 1.0))),
                   sensor_noise=float(rng.uniform(0.0005, 0.002)), seed=int(rng.integers(2**31)))
+    values["plant"] = PlantFactors.random(rng, plant_spread)
     values.update(fixed)
     return TrialSettings(**values)

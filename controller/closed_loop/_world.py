@@ -14,23 +14,24 @@ from dataclasses import replace
 
 import numpy as np
 
-from contact.reduced import ReducedFingertip
 from controller.control.acceleration_control import AccelerationControlParameters
 from controller.control.grasp_force_control import GraspForceController, GraspForceParameters
 from controller.control.incipient_slip import IncipientSlipController, IncipientSlipParameters
 from controller.control.references import GraspPhase
 
-from controller.control._slip_frame import PHASE_CODES, SlipControllerState
+from controller.control._slip_law import PHASE_CODES, SLIP_KINDS
+from controller.plant.fingertip_plant import FingertipPlant
 
 from . import _fused as F
 from . import _kernel as K
+from ._bench import estimator_bench
 from ._bridge import ContactBridge, mujoco_step_function
 from ._sensing import SensingChain
 from ._trial import (APPROACH_GAP_M, ARM_RADIUS, GRAVITY, LIFT_HEIGHT_M, LOOP_RATE, MM_PER_M, TABLE_CLEARANCE_M,
-                     TORQUE_LIMIT, ControllerKind, GraspObject, TrialResult, TrialSettings, default_tip)
+                     TORQUE_LIMIT, ControllerKind, GraspObject, TrialResult, TrialSettings)
 
 
-def _mjcf(obj: GraspObject, settings: TrialSettings, tip: ReducedFingertip) -> str:
+def _mjcf(obj: GraspObject, settings: TrialSettings, tip) -> str:
     """The world: table, lifting arm (position-controlled slide), the object on a free joint, and the two fingers as
     mocap bodies (their closing is stepped by the contact kernel; MuJoCo only shows them)."""
     hx, hy, hz = (0.5 * s for s in obj.size)
@@ -77,30 +78,42 @@ class GraspWorld:
     ----------
     obj : GraspObject
     settings : TrialSettings
-    tip : ReducedFingertip -- both fingertips (default: the FEM-calibrated 3x3 design, ``default_tip``).
+    plant : FingertipPlant, optional -- both fingertips as built (default: ``settings.plant``'s errors on the
+        FEM-calibrated 3x3 design, ``settings.sensor_plane``, the trial's noise and seed). The truth side: the
+        estimator is calibrated on its own bench (``_bench``) and tared at rest, and never reads the plant.
     controller_parameters : IncipientSlipParameters or GraspForceParameters, optional -- the controller's
         parameters, of the kind ``settings.controller`` names (rotational detection is taken from ``settings``).
     """
 
-    def __init__(self, obj: GraspObject, settings: TrialSettings | None = None,
-                 tip: ReducedFingertip | None = None,
+    def __init__(self, obj: GraspObject, settings: TrialSettings | None = None, plant: FingertipPlant | None = None,
                  controller_parameters: IncipientSlipParameters | GraspForceParameters | None = None):
         import mujoco
 
+        if not isinstance(obj, GraspObject):
+            raise TypeError(f"obj={obj!r} must be a GraspObject (e.g. TABLE_I_OBJECTS['eclair'])")
         settings = TrialSettings() if settings is None else settings
+        if not isinstance(settings, TrialSettings):
+            raise TypeError(f"settings={settings!r} must be TrialSettings")
         self.mujoco = mujoco
         self.obj, self.settings = obj, settings
-        self.tip = default_tip() if tip is None else tip
+        self.plant = FingertipPlant(settings.plant, noise=settings.sensor_noise, seed=settings.seed,
+                                    plane=settings.sensor_plane) if plant is None else plant
+        self.tip = self.plant.mechanics                               # the plant's bump laws (truth)
         self.model = mujoco.MjModel.from_xml_string(_mjcf(obj, settings, self.tip))
         self.data = mujoco.MjData(self.model)
         mujoco.mj_forward(self.model, self.data)
         self.rng = np.random.default_rng(settings.seed)
+        # by default the grip as the actuator side reads it (reaction-force observer): the gripper has no force sensor
         self.acceleration_parameters = AccelerationControlParameters(sample_rate_hz=settings.actuator_rate_hz,
-                                                                     torque_limit=TORQUE_LIMIT)
-        self.bridge = ContactBridge(self.model, self.tip, obj, settings.friction_coefficient, self.acceleration_parameters,
-                                    0.5 * obj.size[1] + APPROACH_GAP_M, settings.implicit_coupling)
-        self.sensing = SensingChain(self.tip, settings.sensor_noise, self.rng, settings.targets)
-        self.grasp = _controller(settings, controller_parameters, self.sensing, self.tip)
+                                                                     torque_limit=TORQUE_LIMIT,
+                                                                     force_feedback=settings.force_feedback)
+        self.bridge = ContactBridge(self.model, self.tip, obj, settings.friction_coefficient,
+                                    self.acceleration_parameters, 0.5 * obj.size[1] + APPROACH_GAP_M,
+                                    settings.implicit_coupling, self.plant.friction_anisotropy)
+        # the estimator: calibrated on a nominal build's bench, then tared on this build's arrays at rest
+        self.sensing = SensingChain(estimator_bench(self.plant.plane), settings.targets)
+        self.sensing.tare(self._rest_readings())
+        self.grasp = _controller(settings, controller_parameters, self.sensing)
         # contacts object-table MuJoCo found in the last step (a position-stage sensor: it does not act on the world)
         self.table_sensor = int(self.model.sensor_adr[mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_SENSOR,
                                                                         "table_contact")])
@@ -117,6 +130,19 @@ class GraspWorld:
         if abs(ratio - round(ratio)) > 1e-9 * ratio:
             raise ValueError(f"physics_rate_hz={settings.physics_rate_hz!r} and the grasp-force loop rate {control!r} "
                              f"Hz must be integer multiples of one another")
+
+    def _rest_readings(self) -> np.ndarray:
+        """REST_FRAMES frames (frames, 2, n_nodes) [N] of both arrays with nothing touching, just before the
+        approach (the baselines drift on), their noise from a stream of their own."""
+        rng = np.random.default_rng([self.settings.seed, 0x52455354])                    # "REST"
+        period = 1.0 / self.sensing.array.sample_rate_hz
+        shape = self.plant.array.shape
+        readings = np.empty((REST_FRAMES, 2) + shape)
+        for frame in range(REST_FRAMES):
+            readings[frame] = self.plant.frame_readings(np.zeros((2, len(self.tip.centres), 4)),
+                                                        (frame - REST_FRAMES) * period,
+                                                        rng.standard_normal((2,) + shape))
+        return readings.reshape(REST_FRAMES, 2, -1)
 
     def _schedule(self):
         """[(end time [s], phase)] of the sequence."""
@@ -179,21 +205,18 @@ class GraspWorld:
         # control steps per physics step: the commands of a frame's physics steps (one held over several steps when
         # the physics runs faster than the controller)
         held = np.zeros((per_frame, controls // per_frame if per_frame < controls else 1))
-        loop = self._compiled_loop if isinstance(self.grasp, _IncipientSlip) else self._python_loop
+        loop = self._compiled_loop if isinstance(self.grasp, IncipientSlipController) else self._python_loop
         start = time.perf_counter()
         dropped = loop(phases, lift, held, records, signals, hold_phase)
         wall = time.perf_counter() - start
         unstable = data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number
         if unstable:
             raise RuntimeError(f"MuJoCo reset the simulation {unstable} times (bad accelerations) in trial "
-                               f"{self.obj.name!r} at physics_rate_hz={physics_rate}: the step is too large for this world")
+                               f"{self.obj.name!r} at physics_rate_hz={physics_rate}: the step is too large for this "
+                               f"world")
         times = np.arange(frames) / sensor_rate
         return self._result(times, frame_phases, records, signals, dropped, self.bridge.peak_force_n, wall,
                             frames / sensor_rate)
-
-    def _dropped(self, record) -> bool:
-        """Whether the object touches the table or sank below the clearance (checked after each hold frame)."""
-        return self._touches_table() or record[K.R_HEIGHT] < TABLE_CLEARANCE_M
 
     def _compiled_loop(self, phases, lift, held, records, signals, hold_phase) -> bool:
         """The incipient-slip loop in compiled code (``_fused.run_frames``), the whole trial in one call; ``phases``
@@ -202,14 +225,17 @@ class GraspWorld:
         codes = np.array([PHASE_CODES[phase] for _, phase in self.schedule], dtype=np.int64)[phases]
         constant = math.nan if self.settings.constant_force is None else float(self.settings.constant_force)
         count, sensing = len(self.tip.centres), self.sensing
-        buffers = F.frame_buffers(count, sensing.operator.shape[0])
+        buffers = F.frame_buffers(count, self.plant.array.shape)
         dropped = F.run_frames(
-            0, len(records), sensing.frame_noise(len(records)), sensing.compiled_inputs(), buffers,
-            np.zeros((2, count)), np.zeros((2, count), dtype=np.bool_), self.grasp.state.arrays(), codes, constant,
-            lift, np.zeros(controls), held, self.bridge.compiled_inputs(self.model, self.data), mujoco_step_function(),
+            0, len(records), self.plant.frame_noise(self.rng, len(records)), self.plant.compiled_inputs(),
+            sensing.compiled_inputs(), buffers, np.zeros((2, count)), np.zeros((2, count), dtype=np.bool_),
+            self.grasp.arrays(), codes, constant, lift, np.zeros(controls), held,
+            self.bridge.compiled_inputs(self.model, self.data), mujoco_step_function(),
             self._grasp_local_m, records, signals, hold_phase, self.data.sensordata, self.table_sensor,
-            TABLE_CLEARANCE_M)
-        self.grasp.collect_events(signals)
+            TABLE_CLEARANCE_M, 1.0 / sensing.array.sample_rate_hz)
+        seen = ~np.isnan(signals[:, F.F_EVENT])         # the slip events the compiled loop marked
+        self.grasp.slip_events.extend(zip(signals[seen, F.F_EVENT].tolist(), signals[seen, F.F_EVENT_FRICTION].tolist(),
+                                          [SLIP_KINDS[int(kind)] for kind in signals[seen, F.F_EVENT_KIND]]))
         return dropped
 
     def _python_loop(self, phases, lift, held, records, signals, hold_phase) -> bool:
@@ -218,28 +244,28 @@ class GraspWorld:
         was found dropped."""
         frames, per_frame = len(records), held.shape[0]
         controls = len(phases) // frames
+        codes = np.array([PHASE_CODES[phase] for _, phase in self.schedule], dtype=np.int64)[phases]
         phases = [self.schedule[i][1] for i in phases]
-        constant = self.settings.constant_force
+        constant = math.nan if self.settings.constant_force is None else float(self.settings.constant_force)
         bridge, grasp, sensing = self.bridge, self.grasp, self.sensing
         commands, command, dropped = np.zeros(controls), 0.0, False
+        noise, period = self.plant.frame_noise(self.rng, frames), 1.0 / sensing.array.sample_rate_hz
         for frame_index in range(frames):
-            frame = sensing.sense(bridge)
+            readings = self.plant.frame_readings(bridge.bump_states, frame_index * period, noise[frame_index])
+            frame = sensing.sense(readings.reshape(2, -1))
             grasp.observe(frame)
             first = frame_index * controls
             for step in range(controls):
-                phase = phases[first + step]
-                command = grasp.step(phase)
-                if constant is not None and phase is not GraspPhase.APPROACH:
-                    command = constant if phase is not GraspPhase.RELEASE else 0.0
+                command = F.applied_command(grasp.step(phases[first + step]), codes[first + step], constant)
                 commands[step] = command
-            held[:] = commands.reshape(per_frame, -1) if held.shape[1] > 1 else \
-                commands[np.arange(per_frame) * controls // per_frame, None]
+            F.hold_commands(commands, held)
             bridge.run(self.model, self.data, held, lift[frame_index * per_frame:(frame_index + 1) * per_frame],
                        self._grasp_local_m, records[frame_index])
             signals[frame_index, :F.F_EVENT] = (command, frame.shear_displacement, frame.twist_angle,
                                                 grasp.friction_estimate)
             if hold_phase[frame_index] and not dropped:
-                dropped = self._dropped(records[frame_index])
+                dropped = F.object_dropped(self.data.sensordata[self.table_sensor], records[frame_index, K.R_HEIGHT],
+                                           TABLE_CLEARANCE_M)
         return dropped
 
     def _result(self, times, phases, records, signals, dropped, force_peak, wall, simulated) -> TrialResult:
@@ -274,11 +300,18 @@ class GraspWorld:
                 result.rotation_creep_mrad_per_s = float(1e3 * abs(rates[3]))
             result.hold_slip_mm = float(np.linalg.norm(hold[-1, 2:5] - hold[0, 2:5]))
             result.hold_rotation_mrad = float(1e3 * abs(hold[-1, 5] - hold[0, 5]))
-        result.success = not result.dropped and not result.crushed and bool(holding.any())
+            found = max([event[0] for event in result.slip_events], default=-math.inf)
+            after = hold[hold[:, 0] >= max(found + FOUND_SETTLE, hold[0, 0] + 0.5)]
+            if len(after) > 2:
+                rates = np.polyfit(after[:, 0] - after[0, 0], after[:, 2:5], 1)[0]
+                result.creep_after_friction_um_per_s = float(1e3 * np.linalg.norm(rates))
+        result.success = result.outcome == "held" and bool(holding.any())
         return result
 
 
 SETTLED_WINDOW = 1.0          # s: the end of the hold over which the settled grip force is averaged
+REST_FRAMES = 20              # frames at rest before the approach: the estimator's tare (0.2 s at 100 Hz)
+FOUND_SETTLE = 0.2            # s after the last slip event before the creep "after the friction is found" is measured
 
 
 class _DisplacementLaw:
@@ -302,33 +335,7 @@ class _DisplacementLaw:
         return self.controller.step(*self._inputs, phase)
 
 
-class _IncipientSlip:
-    """The incipient-slip controller in its compiled form (``controller.control._slip_frame``), run by ``_fused``."""
-
-    def __init__(self, controller: IncipientSlipController):
-        self.parameters = controller.parameters
-        self.state = SlipControllerState(controller)
-
-    @property
-    def minimum_force(self):
-        return self.state.minimum_force
-
-    @property
-    def friction_estimate(self) -> float:
-        return self.state.friction_estimate
-
-    @property
-    def slip_events(self) -> list:
-        return self.state.slip_events
-
-    def collect_events(self, signals) -> None:
-        """The slip events the compiled loop marked in ``signals`` ((time [s], mu_hat) per detection)."""
-        seen = ~np.isnan(signals[:, F.F_EVENT])
-        self.state.slip_events.extend(zip(signals[seen, F.F_EVENT].tolist(),
-                                          signals[seen, F.F_EVENT_FRICTION].tolist()))
-
-
-def _controller(settings: TrialSettings, parameters, sensing: SensingChain, tip: ReducedFingertip):
+def _controller(settings: TrialSettings, parameters, sensing: SensingChain):
     """The trial's controller, fed only what the sensor reports (``observe``) and the phase (``step``)."""
     limit = TORQUE_LIMIT / ARM_RADIUS
     if settings.controller is ControllerKind.DISPLACEMENT_TARGETS:
@@ -345,11 +352,16 @@ def _controller(settings: TrialSettings, parameters, sensing: SensingChain, tip:
         raise ValueError(f"controller_parameters must be IncipientSlipParameters for {settings.controller.value}, "
                          f"got {type(base).__name__}")
     frame_rate = sensing.array.sample_rate_hz
-    return _IncipientSlip(IncipientSlipController(
+    return IncipientSlipController(
         replace(base, rotational_slip_detection=settings.rotational_slip_detection, frame_rate_hz=frame_rate),
-        tip.centres))
+        sensing.layout.centre_array)                     # the estimator's layout of the design
 
 
 def run_trial(obj: GraspObject, settings: TrialSettings | None = None, **options) -> TrialResult:
-    """Build the world for one trial and run it."""
+    """Build the world for one trial and run it (``GraspWorld``'s options: ``plant``, ``controller_parameters``;
+    TypeError naming the argument for anything but a GraspObject and a TrialSettings or None)."""
+    if not isinstance(obj, GraspObject):
+        raise TypeError(f"obj={obj!r} is a {type(obj).__name__}, not a GraspObject (e.g. TABLE_I_OBJECTS['eclair'])")
+    if settings is not None and not isinstance(settings, TrialSettings):
+        raise TypeError(f"settings={settings!r} is a {type(settings).__name__}, not a TrialSettings (or None)")
     return GraspWorld(obj, settings, **options).run()

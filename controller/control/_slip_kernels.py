@@ -13,7 +13,13 @@ import math
 import numpy as np
 from fem.compiled import njit_cached
 
-__all__ = ["array_margin", "fingertip_need", "slip_signature", "low_pass_frame"]
+__all__ = ["array_margin", "fingertip_need", "slip_signature", "low_pass_frame", "carried_wrench"]
+
+# a held grasp's carried load still moves with its grip: the estimator's own error (its kernel and arm are not the
+# plant's) and the bumps' own elasticity, whose tangential stiffness follows the grip, make it fall by about 0.25-0.6
+# of a falling grip over the probe (measured in the closed loop); a grasp sliding as a whole loses it as fast as the
+# grip (its friction is mu P): a load that fell by at least this share of the grip's fall slid
+GROSS_SHARE = 0.8
 
 @njit_cached
 def array_margin(centres, bump_force, load, torque, friction, start_x=0.0, start_y=0.0, first_step=-1.0,
@@ -61,52 +67,107 @@ def array_margin(centres, bump_force, load, torque, friction, start_x=0.0, start
 
 
 @njit_cached
-def fingertip_need(centres, force, ratio, contact, rotational, slip_centre, full_search, warm_step):
-    """F / lambda*(mu = 1) [N] of the more loaded fingertip (the module docstring's demand at mu = 1); without
-    rotational detection |F_t| of that fingertip. ``slip_centre`` (2, 2) [mm] holds each fingertip's last slip
-    centre (inf: none): a full search when ``full_search`` or none, else a warm start near it (updated in place)."""
+def _utilisation(centres, force, ratio, contact, finger, rotational, slip_centre, full_search, warm_step):
+    """1 / lambda*(mu = 1) [-] of fingertip ``finger``: the share of its friction capacity at mu = 1 its load uses
+    (module docstring of incipient_slip); without rotational detection |sum q| / sum P. Scale-free: the bump
+    forces' common scale cancels. Updates the fingertip's slip centre (warm starts)."""
     count = centres.shape[0]
-    finger, largest = 0, -1.0
-    for f in range(2):
-        total = 0.0
-        for i in range(count):
-            total += force[f, i] * math.hypot(ratio[f, i, 0], ratio[f, i, 1])
-        if total > largest:
-            finger, largest = f, total
     used = np.empty(count)
     load = np.zeros(2)
     torque = 0.0
     for i in range(count):
         used[i] = force[finger, i] if contact[finger, i] else 0.0
-        q_x, q_y = force[finger, i] * ratio[finger, i, 0], force[finger, i] * ratio[finger, i, 1]
+        q_x, q_y = used[i] * ratio[finger, i, 0], used[i] * ratio[finger, i, 1]
         load[0] += q_x
         load[1] += q_y
         torque += centres[i, 0] * q_y - centres[i, 1] * q_x
+    total = used.sum()
+    if total <= 0.0:
+        return 0.0
     if not rotational:
-        return math.hypot(load[0], load[1])
+        return math.hypot(load[0], load[1]) / total
     if full_search or not math.isfinite(slip_centre[finger, 0]):
         margin, centre_x, centre_y = array_margin(centres, used, load, torque, 1.0)
     else:
         margin, centre_x, centre_y = array_margin(centres, used, load, torque, 1.0, slip_centre[finger, 0],
                                                   slip_centre[finger, 1], warm_step, 8)
     slip_centre[finger, 0], slip_centre[finger, 1] = centre_x, centre_y
-    return used.sum() / margin if margin > 0.0 else math.inf
+    return 1.0 / margin if margin > 0.0 else math.inf
 
 
 @njit_cached
-def slip_signature(force, ratio, contact, force_then, ratios_then, judged, plateau, second_frame, hold_ratio,
-                   total_drop, force_drop, stick_exponent, loaded_share, force_share, noise):
+def fingertip_need(centres, force, ratio, contact, rotational, slip_centre, full_search, warm_step):
+    """The demand of the module docstring per unit grip: nu = 1 / lambda*(mu = 1) [-] of the more used fingertip,
+    so that the grip F / (s lambda*(mu_hat)) = F nu / (s mu_hat) holds the array at s of its limit, and that
+    fingertip's sensed normal force sum P [N] (the F of the readings). ``slip_centre`` (2, 2) [mm] holds each
+    fingertip's last slip centre (inf: none): a full search when ``full_search`` or none, else a warm start near
+    it."""
+    largest, sensed = 0.0, 0.0
+    for f in range(2):
+        value = _utilisation(centres, force, ratio, contact, f, rotational, slip_centre, full_search, warm_step)
+        if value > largest:
+            largest = value
+            sensed = 0.0
+            for i in range(centres.shape[0]):
+                sensed += force[f, i] if contact[f, i] else 0.0
+    return largest, sensed
+
+
+@njit_cached
+def carried_wrench(force, ratio, contact, centres, second_frame):
+    """What the grasp carries, from both fingertips' bump forces (2, k) [N] and load ratios (2, k, 2) [-]: the
+    total tangential force |sum q| [N], the total moment |sum r x q| [N mm] about the arrays' centres (the second
+    fingertip's axes turned into the first's: a mirrored frame reverses its moments) and the total normal force
+    sum P [N]; only bumps in ``contact``."""
+    total_x = total_y = moment = normal = 0.0
+    mirror = second_frame[0] * second_frame[1]
+    for f in range(2):
+        tip_x = tip_y = tip_moment = 0.0
+        for i in range(force.shape[1]):
+            if not contact[f, i]:
+                continue
+            q_x, q_y = force[f, i] * ratio[f, i, 0], force[f, i] * ratio[f, i, 1]
+            tip_x += q_x
+            tip_y += q_y
+            tip_moment += centres[i, 0] * q_y - centres[i, 1] * q_x
+            normal += force[f, i]
+        total_x += tip_x if f == 0 else second_frame[0] * tip_x
+        total_y += tip_y if f == 0 else second_frame[1] * tip_y
+        moment += tip_moment if f == 0 else mirror * tip_moment
+    return math.hypot(total_x, total_y), abs(moment), normal
+
+
+@njit_cached
+def slip_signature(force, ratio, fast_force, fast_ratio, contact, centres, force_then, ratios_then, judged,
+                   watch_total, reference, carried, second_frame, hold_ratio, total_drop, force_drop, stick_exponent,
+                   loaded_share, force_share, noise, wrench_noise, reach, use_now, use_then, use_noise, use_mode,
+                   use_level, stall_rise, stall_fraction):
     """The slip watch's tests on one frame (the module docstring).
 
-    Returns signature (2, k + 1) bool (per bump, and the grasp's total in [0, k]), the total ratio (a sliding
-    fingertip's |sum q| / sum P), the largest ratio of the bearing bumps and |rho_i| (2, k). ``plateau`` (|total
-    load| [N], sum P [N]) is set on the first call (negative: unset); bumps are judged only when ``judged``, against
-    the frame ``watch_frames`` ago (force_then, ratios_then); a bump's ratio must stay below the slip bound by
-    ``noise`` (2, k) [-] too (a margin over its estimate's noise)."""
+    Returns signature (2, k + 1) bool (per bump, and the grasp's gross slip in [0, k]), the total ratio (a sliding
+    fingertip's |sum q| / sum P), the largest ratio of the bearing bumps and |rho_i| (2, k).
+
+    Bumps (slowly filtered ``force``, ``ratio``) are judged only when ``judged``, against the frame
+    ``watch_frames`` ago (force_then, ratios_then): a bump whose force fell by ``force_drop`` while its ratio rose
+    less than a stuck bump's (P^-``stick_exponent``, with a margin ``noise`` (2, k) [-] over its estimate's noise)
+    slides. Gross slip (slow signals, below the object's swing in the fingers; when ``watch_total``): the carried
+    load's dominant component - the total force F or the moment T / ``reach`` - and the normal force fell below
+    ``reference`` (the largest F, T / reach and sum P [N] of the last frames; negative: none yet) by ``total_drop``
+    and by the noise margin ``wrench_noise`` [N]: held, the grasp carries a constant load whatever its grip;
+    sliding, its friction falls as fast as the grip (a short window: the estimator's own error of the load drifts
+    with the grip far slower). ``carried`` (3,) receives this frame's (F, T / reach, sum P). The
+    array as a whole (slowly filtered), in [1, k]: its utilisation nu and normal force ``use_now`` (2,) against
+    ``use_then`` (2,) of the frame ``watch_frames`` ago. ``use_mode`` 1 (a probe): the same test as a bump's with
+    the margin ``use_noise`` [-] - a grasp that slides as a whole keeps nu = mu while its grip falls, held its nu
+    rises like 1 / P. ``use_mode`` 2 (a lift): the grip holds nu at ``use_level``; nu stalled (moved less than
+    ``stall_rise`` over the window) below ``stall_fraction`` of it while the grip sank, or anywhere while the grip
+    rose by ``force_drop``, is a load that follows the grip: the bumps slide at a friction the prior does not cover
+    (held, nu rises to the level as the weight comes off the table - the grip grows with it - and then stays
+    there at a grip that no longer grows)."""
     count = force.shape[1]
     signature = np.zeros((2, count + 1), dtype=np.bool_)
     ratios = np.empty((2, count))
-    total_x = total_y = total_force = total_ratio = bearing = 0.0
+    total_ratio = bearing = 0.0
     mean_force = np.zeros(2)
     largest = np.zeros(2)
     for f in range(2):
@@ -114,27 +175,41 @@ def slip_signature(force, ratio, contact, force_then, ratios_then, judged, plate
         contacts = 0
         for i in range(count):
             ratios[f, i] = math.hypot(ratio[f, i, 0], ratio[f, i, 1])
-            tip_x += force[f, i] * ratio[f, i, 0]
-            tip_y += force[f, i] * ratio[f, i, 1]
-            finger_force += force[f, i]
+            tip_x += fast_force[f, i] * fast_ratio[f, i, 0]
+            tip_y += fast_force[f, i] * fast_ratio[f, i, 1]
+            finger_force += fast_force[f, i]
             if contact[f, i]:
                 contacts += 1
                 largest[f] = max(largest[f], ratios[f, i])
-        total_x += tip_x if f == 0 else second_frame[0] * tip_x
-        total_y += tip_y if f == 0 else second_frame[1] * tip_y
-        total_force += finger_force
-        mean_force[f] = finger_force / max(contacts, 1)
+        mean_force[f] = force[f].sum() / max(contacts, 1)
         if finger_force > 0.0:
             total_ratio = max(total_ratio, math.hypot(tip_x, tip_y) / finger_force)
     for f in range(2):
         for i in range(count):
             if contact[f, i] and force[f, i] >= force_share * mean_force[f]:
                 bearing = max(bearing, ratios[f, i])
-    total_load = math.hypot(total_x, total_y)
-    if plateau[0] < 0.0:
-        plateau[0], plateau[1] = total_load, total_force
-    signature[0, count] = (plateau[0] > 0.0 and total_load <= (1.0 - total_drop) * plateau[0]
-                           and total_force <= (1.0 - total_drop) * plateau[1] and total_ratio > hold_ratio)
+    load, moment, normal = carried_wrench(force, ratio, contact, centres, second_frame)
+    # the component of the carried load that dominates: its force or its moment over the array's reach (with a
+    # moment, the bumps' forces also carry an internal, grip-dependent part; the moment is the object's own)
+    carried[0], carried[1], carried[2] = load, moment / reach, normal
+    if watch_total and reference[2] > 0.0:
+        component = 1 if reference[1] > reference[0] else 0
+        now, then = carried[component], reference[component]
+        load_fall, grip_fall = 1.0 - now / then if then > 0.0 else 0.0, 1.0 - normal / reference[2]
+        # fell by the threshold, and at least GROSS_SHARE as fast as the grip
+        signature[0, count] = (then > 0.0 and now <= then - max(total_drop * then, wrench_noise)
+                               and grip_fall >= total_drop and load_fall >= GROSS_SHARE * grip_fall
+                               and total_ratio > hold_ratio)
+    if use_mode == 1 and use_then[0] > 0.0 and use_then[1] > 0.0 and use_now[0] > hold_ratio:
+        fallen = use_now[1] / use_then[1]
+        signature[1, count] = fallen <= 1.0 - force_drop and \
+            use_now[0] + use_noise <= use_then[0] * fallen ** (-stick_exponent)
+    elif use_mode == 2 and use_then[0] > 0.0 and use_then[1] > 0.0:
+        # a regulated lift keeps nu at its level; nu stuck away from it for a window - below it while the grip sank,
+        # or above it while the grip rose and could not pull it down - is a load held by friction alone: sliding
+        stalled = abs(use_now[0] / use_then[0] - 1.0) + use_noise / use_now[0] <= stall_rise
+        grew = use_now[1] > (1.0 + force_drop) * use_then[1]
+        signature[1, count] = stalled and ((0.3 * use_level < use_now[0] < stall_fraction * use_level) or grew)
     if judged:
         for f in range(2):
             for i in range(count):

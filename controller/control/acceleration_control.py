@@ -19,6 +19,12 @@ disturbance is (1 - Q(z)) d with Q(1) = 1, so a constant disturbance leaves no s
 (final-value theorem), while an uncancelled torque d would leave e = I_a d / (J_n r). The DOB also cancels
 the load torque r F, so the loop relies on it: without the DOB the force loop gain J_n r / I_a is far too low.
 
+Force feedback. F_k is either a force sensor's reading (``ForceFeedback.SENSOR``) or the observer's own estimate
+F_hat = d_hat / r (``ForceFeedback.OBSERVER``, a reaction-force observer): the DOB sees the load torque r F among
+the disturbances, so a gripper without a force sensor reads its grip from the actuator side. What else the DOB sees
+- the finger's damping and the error of the nominal inertia while the finger moves - is then read as force: the
+estimate is exact at rest and lags by the DOB's filter.
+
 The averaged torque in the DOB is exact for the zero-order-held nominal plant: for J_n q'' = tau held over each
 period, q_k - 2 q_{k-1} + q_{k-2} = T^2 (tau_{k-1} + tau_{k-2}) / (2 J_n), so the raw estimate is zero without
 disturbance. The DOB is fed the saturated (applied) torque, so the estimate does not wind up at the torque limit.
@@ -26,6 +32,7 @@ disturbance. The DOB is fed the saturated (applied) torque, so the estimate does
 
 from __future__ import annotations
 
+import enum
 import math
 from dataclasses import dataclass
 
@@ -35,7 +42,14 @@ from fem.validation import check_positive, check_range
 
 from .filters import FirstOrderLowPass, sample_period
 
-__all__ = ["AccelerationControlParameters", "DisturbanceObserver", "AccelerationController"]
+__all__ = ["AccelerationControlParameters", "DisturbanceObserver", "AccelerationController", "ForceFeedback"]
+
+
+class ForceFeedback(str, enum.Enum):
+    """Where the force loop's F comes from (module docstring)."""
+
+    SENSOR = "sensor"          # a force sensor on the finger: the measured contact force
+    OBSERVER = "observer"      # the reaction-force observer d_hat / r: the actuator side alone
 
 
 @dataclass(frozen=True)
@@ -51,6 +65,7 @@ class AccelerationControlParameters:
     sample_rate_hz : float -- loop rate f_s [Hz], > 0 (8 kHz in the paper).
     arm_radius : float -- nominal fingertip travel per joint angle r [mm/rad], > 0.
     torque_limit : float -- torque command limit tau_max [N mm], > 0.
+    force_feedback : ForceFeedback -- the force sensor's reading, or the observer's estimate d_hat / r.
     """
 
     nominal_inertia: float = 0.1
@@ -60,8 +75,14 @@ class AccelerationControlParameters:
     sample_rate_hz: float = 8000.0
     arm_radius: float = 50.0
     torque_limit: float = 500.0
+    force_feedback: ForceFeedback = ForceFeedback.SENSOR
 
     def __post_init__(self):
+        try:
+            object.__setattr__(self, "force_feedback", ForceFeedback(self.force_feedback))
+        except ValueError:
+            raise ValueError(f"force_feedback={self.force_feedback!r} is not one of "
+                             f"{[item.value for item in ForceFeedback]}") from None
         check_positive("nominal_inertia", self.nominal_inertia, "N mm s^2")
         check_positive("target_inertia", self.target_inertia, "N mm s^2")
         check_positive("target_damping", self.target_damping, "N mm s/rad")
@@ -136,11 +157,13 @@ class AccelerationController:
         self.torque = 0.0                                # tau_k [N mm]
 
     def step(self, force_command: float, measured_force: float, angle: float) -> float:
-        """One 8 kHz step: F_ref [N], measured F [N], joint angle q [rad] -> saturated torque command [N mm]."""
+        """One 8 kHz step: F_ref [N], measured F [N] (a force sensor's; not read with ``ForceFeedback.OBSERVER``),
+        joint angle q [rad] -> saturated torque command [N mm]."""
         p = self.parameters
         self.velocity = (angle - self.observer.angles[0]) / self.sample_period
         disturbance = self.observer.step(angle)
-        acceleration_reference = (p.arm_radius * (force_command - measured_force)
+        force = disturbance / p.arm_radius if p.force_feedback is ForceFeedback.OBSERVER else measured_force
+        acceleration_reference = (p.arm_radius * (force_command - force)
                                   - p.target_damping * self.velocity) / p.target_inertia
         torque = p.nominal_inertia * acceleration_reference + (disturbance if self.use_dob else 0.0)
         self.torque = min(max(torque, -p.torque_limit), p.torque_limit)

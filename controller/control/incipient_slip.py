@@ -20,7 +20,8 @@ never below the minimum contact force F_min.
 
 Friction estimate: probe and watch. Before any slip was seen mu_hat is ``prior_friction``, the lowest friction the
 gripper is designed for, with a wider margin (``lift_safety_fraction``: the load grows in the lift faster than the
-grip follows). In HOLD the reference generator probes: it raises mu_hat by ``probe_rate`` per second (the grip falls
+grip follows). From ``probe_delay`` after the lift's start (through the rest of the lift and the hold) the law
+probes: it raises mu_hat by ``probe_rate`` per second (the grip falls
 the same way) while it watches how each loaded bump's load ratio answers its falling normal force over the last
 ``watch_frames`` frames. A stuck bump keeps its load (equilibrium fixes it; its share moves with its stiffness,
 ~ P_i^(1/3), when the normal forces redistribute), so its ratio rises at least like P_i^-(2/3); a bump on its
@@ -52,17 +53,27 @@ import numpy as np
 
 from fem.validation import check_positive, check_range
 
-from ._slip_kernels import array_margin, fingertip_need, low_pass_frame, slip_signature
+from ._slip_kernels import array_margin
+from ._slip_law import (PHASE_CODES, P_APPROACH_FORCE, P_CONFIRM_FRAMES, P_FAST_GAIN, P_FORCE_DROP, P_FORCE_SHARE,
+                        P_FULL_SEARCH_EVERY, P_GROSS_FRAMES, P_LIFT_SAFETY, P_LOADED_SHARE, P_LOOP_RATE,
+                        P_MAXIMUM_FORCE, P_MAXIMUM_FRICTION, P_NOISE_MARGIN, P_PERIOD, P_PRIOR_FRICTION, P_PROBE_DELAY,
+                        P_PROBE_RATE, P_RAMP_RATE, P_REACH, P_RELEASE_LOOP_RATE, P_RELEASE_RATE, P_ROTATIONAL, P_SAFETY,
+                        P_SCALE_GAIN, P_SIZE, P_SLOW_GAIN, P_STALL_FRACTION, P_STALL_RISE, P_STICK_EXPONENT,
+                        P_TOTAL_DROP, P_WARM_STEP, P_WATCH_TIME, SLIP_KINDS, X_COMMAND, X_FRICTION, X_MINIMUM, X_NEED,
+                        X_PROBING, X_SIZE, X_SLIP_SEEN, X_TIME, control_step, observe_frame)
 from .filters import sample_period, tustin_gain
 from .references import GraspPhase
 
 FULL_SEARCH_EVERY = 10              # frames between full searches of the array's slip centre (warm starts between)
-# a bump's ratio must rise less than a stuck bump's by this many of its estimate's standard deviations (raw, per frame;
-# the slow watch filter and the window's difference leave about 0.6 of it): 3 x 0.6 ~ 2 sigma of the compared values,
-# the largest of some 18 bumps over a few frames
-NOISE_MARGIN = 3.0
+# a bump's ratio must rise less than a stuck bump's by this many standard deviations of the compared difference
+# (two slowly filtered values); two bumps of a fingertip must show it (``_slip_law``), which keeps noise out
+NOISE_MARGIN = 2.5
+SCALE_TIME = 1.0                    # s: the sensed force is put in the force loop's scale over this time
+GROSS_WINDOW = 0.1                  # s: a load that fell within this time, as fast as the grip, slid
+STALL_RISE = 0.02                   # a lift's utilisation that rose less than this over the window has stalled
+STALL_FRACTION = 0.8                # ... below this share of the lift's level: the bumps slide below the prior
 
-__all__ = ["IncipientSlipParameters", "IncipientSlipController", "array_margin"]
+__all__ = ["IncipientSlipParameters", "IncipientSlipController", "array_margin", "law_parameters"]
 
 
 @dataclass(frozen=True)
@@ -82,7 +93,7 @@ class IncipientSlipParameters:
     prior_friction : float -- friction estimate before a slip was seen (lowest expected) [-], > 0.
     maximum_friction : float -- highest friction the probe believes (it stops there) [-], > prior_friction.
     probe_rate : float -- relative rise of the friction estimate per second while probing [1/s], > 0.
-    probe_delay : float -- time in HOLD before the probe starts (the lift's signals settle) [s], >= 0.
+    probe_delay : float -- time from the lift's start before the probe starts (the weight is off the table) [s], >= 0.
     total_drop : float -- fall of a fingertip's total tangential load and normal force from where the watch began
         that means gross slip [-], (0, 1).
     watch_frames : int -- window over which a bump's ratio is compared with its normal force [frames], >= 2.
@@ -110,9 +121,9 @@ class IncipientSlipParameters:
     lift_safety_fraction: float = 0.7
     prior_friction: float = 0.4
     maximum_friction: float = 2.0
-    probe_rate: float = 0.5
-    probe_delay: float = 0.5
-    total_drop: float = 0.03
+    probe_rate: float = 0.3
+    probe_delay: float = 1.2
+    total_drop: float = 0.015
     watch_frames: int = 25
     force_drop: float = 0.04
     stick_exponent: float = 0.6
@@ -128,12 +139,14 @@ class IncipientSlipParameters:
     def __post_init__(self):
         check_positive("sample_rate_hz", self.sample_rate_hz, "Hz")
         check_range("frame_rate_hz", self.frame_rate_hz, 0.0, self.sample_rate_hz, "Hz", low_open=True)
-        for name in ("filter_cutoff_hz", "watch_cutoff_hz"):
-            check_range(name, getattr(self, name), 0.0, 0.5 * self.frame_rate_hz, "Hz", True, True)
+        for name, value in (("filter_cutoff_hz", self.filter_cutoff_hz), ("watch_cutoff_hz", self.watch_cutoff_hz)):
+            check_range(name, value, 0.0, 0.5 * self.frame_rate_hz, "Hz", True, True)
         check_range("loop_rate", self.loop_rate, 0.0, 0.1 * self.sample_rate_hz, "rad/s", low_open=True)
         check_range("release_loop_rate", self.release_loop_rate, 0.0, self.loop_rate, "rad/s", low_open=True)
-        for name in ("safety_fraction", "lift_safety_fraction", "force_drop", "total_drop", "stick_exponent"):
-            check_range(name, getattr(self, name), 0.0, 1.0, low_open=True, high_open=True)
+        for name, value in (("safety_fraction", self.safety_fraction), ("force_drop", self.force_drop),
+                            ("lift_safety_fraction", self.lift_safety_fraction), ("total_drop", self.total_drop),
+                            ("stick_exponent", self.stick_exponent)):
+            check_range(name, value, 0.0, 1.0, low_open=True, high_open=True)
         check_positive("prior_friction", self.prior_friction)
         check_range("maximum_friction", self.maximum_friction, self.prior_friction, math.inf, low_open=True,
                     high_open=True)
@@ -154,29 +167,16 @@ class IncipientSlipParameters:
             raise ValueError(f"rotational_slip_detection={self.rotational_slip_detection!r} must be True or False")
 
 
-class _History:
-    """Ring buffer of the slip watch: bump forces and |rho_i| (watch_frames, 2, k) and how many were written."""
-
-    def __init__(self, frames: int, count: int):
-        self.force, self.ratios, self.count = np.zeros((frames, 2, count)), np.zeros((frames, 2, count)), 0
-
-
-class _Filtered:
-    """Low-passed bump forces (2, k) [N] and load ratios (2, k, 2) [-] with their previous inputs."""
-
-    def __init__(self, gain: float, count: int):
-        self.gain = gain
-        self.force, self.previous_force = np.zeros((2, count)), np.zeros((2, count))
-        self.ratio, self.previous_ratio = np.zeros((2, count, 2)), np.zeros((2, count, 2))
-
-
 class IncipientSlipController:
-    """The law of the module docstring: ``observe(bump_force, load_ratio, in_contact)`` at each sensor frame,
-    ``step(phase)`` at the control rate -> grasp-force command [N].
+    """The law of the module docstring: ``observe(bump_force, load_ratio, in_contact, ratio_noise)`` at each sensor
+    frame, ``step(phase)`` at the control rate -> grasp-force command [N].
 
-    State: ``command`` [N], ``minimum_force`` [N] (None until two contacts), ``friction_estimate`` mu_hat [-],
-    ``probing`` / ``slip_seen`` flags, ``need`` [N] (F / lambda*(mu = 1) of the more loaded fingertip: the grip
-    at which it would slide at mu = 1), ``slip_events`` ((time [s], mu_hat) at each detection).
+    A thin wrapper: the state lives in a few arrays (``arrays()``) and the law is the compiled kernels of
+    ``_slip_law`` (``observe_frame``, ``control_step``), which the closed loop's fused frame loop calls on the same
+    arrays. Read-outs: ``command`` [N], ``minimum_force`` [N] (None until two contacts), ``friction_estimate``
+    mu_hat [-], ``probing`` / ``slip_seen``, ``need`` [N] (F / lambda*(mu = 1) of the more loaded fingertip: the
+    grip at which it would slide at mu = 1), ``time`` [s] and ``slip_events`` ((time [s], mu_hat, kind) per
+    detection; kind 'bump', 'gross' or 'array').
 
     Parameters
     ----------
@@ -189,152 +189,111 @@ class IncipientSlipController:
     def __init__(self, parameters: IncipientSlipParameters, centres, second_frame=(1.0, -1.0)):
         self.parameters = parameters
         self.centres = np.ascontiguousarray(centres, dtype=float)
-        self.second_frame = np.asarray(second_frame, dtype=float)
+        if self.centres.ndim != 2 or self.centres.shape[1] != 2 or not len(self.centres):
+            raise ValueError(f"centres must have shape (k, 2) with k >= 1, got {self.centres.shape}")
+        self.second_frame = np.ascontiguousarray(second_frame, dtype=float)
         if self.second_frame.shape != (2,) or not np.all(np.abs(self.second_frame) == 1.0):
             raise ValueError(f"second_frame={second_frame!r} must be two signs (+-1, +-1)")
         self.period = sample_period(parameters.sample_rate_hz)
-        self.command = parameters.approach_force
-        self.minimum_force = None
-        self.friction_estimate = parameters.prior_friction
-        self.probing = False
-        self.slip_seen = False
-        self.need = 0.0
-        self.time = 0.0
-        self.slip_events = []
+        self.law = law_parameters(parameters, self.centres)
         count = len(self.centres)
-        self._signals = _Filtered(tustin_gain(parameters.filter_cutoff_hz, parameters.frame_rate_hz), count)
-        self._watched = _Filtered(tustin_gain(parameters.watch_cutoff_hz, parameters.frame_rate_hz), count)
-        self._started = False
-        self._contact = np.zeros((2, len(self.centres)), dtype=bool)
-        self._contacts = 0                                 # bumps in contact on the fingertip that sees more
-        self._ratio_noise = np.zeros((2, len(self.centres)))
-        self._plateau = np.full(2, -1.0)                 # (|total load|, sum P) when the watch began (-1: not yet)
-        self._history = _History(parameters.watch_frames, len(self.centres))     # (P_i, |rho_i|) of the last frames
-        self._watching = False
-        self._probe_begun = False
-        self._streak = np.zeros((2, len(self.centres) + 1), dtype=int)      # frames each bump / total has slid
-        self._hold_time = 0.0
-        self._release = None
-        self._frames = 0
-        self._slip_centre = np.full((2, 2), math.inf)     # each fingertip's last slip centre [mm] (warm starts)
-        self._reach = float(np.hypot(self.centres[:, 0], self.centres[:, 1]).max())
+        self.scalars = np.zeros(X_SIZE)
+        self.scalars[X_COMMAND], self.scalars[X_MINIMUM] = parameters.approach_force, math.nan
+        self.scalars[X_FRICTION] = parameters.prior_friction
+        self.contact = np.zeros((2, count), dtype=np.bool_)
+        self.signals = np.zeros((5, 2, count))            # fast and slow filters with their previous inputs, noise
+        self.ratios = np.zeros((4, 2, count, 2))          # the same for the load ratios
+        self.plateau = np.array([-1.0, -1.0, 0.0])        # (wrench, sum P) when the watch began (-1: not yet), watched
+        self.history_force = np.zeros((parameters.watch_frames, 2, count))
+        self.history_ratios = np.zeros((parameters.watch_frames, 2, count))
+        # the array's utilisation and sensed force, the carried force, moment / reach and sensed force (all slow)
+        self.history_use = np.zeros((parameters.watch_frames, 5))
+        self.streak = np.zeros((2, count + 1), dtype=np.int64)     # frames each bump / the total has slid
+        self.slip_centre = np.full((2, 2), math.inf)      # each fingertip's last slip centre [mm] (warm starts)
+        self.slip_events: list[tuple[float, float]] = []
 
-    # --- sensor frames (100 Hz) ---------------------------------------------------------------------------
+    def arrays(self) -> tuple:
+        """The state arrays, in the order ``observe_frame`` takes them after the frame's inputs."""
+        return (self.law, self.centres, self.second_frame, self.scalars, self.contact, self.signals, self.ratios,
+                self.plateau, self.history_force, self.history_ratios, self.history_use, self.streak, self.slip_centre)
+
     def observe(self, bump_force, load_ratio, in_contact, ratio_noise=None) -> None:
         """Take a sensor frame: bump forces (2, k) [N], load-ratio estimates (2, k, 2) [-], in-contact (2, k), and
         the standard deviation of each ratio estimate (2, k) [-] if the sensor gives it (None: noise-free)."""
-        self._ratio_noise = np.zeros(self._contact.shape) if ratio_noise is None else \
-            np.asarray(ratio_noise, dtype=float)
-        contact = np.asarray(in_contact, dtype=np.bool_)
-        fast, slow = self._signals, self._watched
-        restart = not self._started or bool(np.any(contact & ~self._contact))   # a new contact: start afresh
-        self._started, self._contact = True, contact
-        self._contacts = int(contact.sum(axis=1).max())
-        low_pass_frame(fast.gain, np.asarray(bump_force, dtype=float), np.asarray(load_ratio, dtype=float), contact,
-                       fast.previous_force, fast.previous_ratio, fast.force, fast.ratio, restart)
-        low_pass_frame(slow.gain, fast.force, fast.ratio, contact, slow.previous_force, slow.previous_ratio,
-                       slow.force, slow.ratio, restart)
-        self._frames += 1
-        full = self._frames % FULL_SEARCH_EVERY == 0
-        self.need = fingertip_need(self.centres, fast.force, fast.ratio, contact,
-                                   self.parameters.rotational_slip_detection, self._slip_centre, full,
-                                   0.1 * self._reach)
-        if self._watching:
-            self._watch(slow.force, slow.ratio, contact)
-
-    def _watch(self, force, ratio, contact) -> None:
-        """The slip watch of the module docstring, on the slowly filtered signals (``slip_signature``)."""
-        p = self.parameters
-        hold_ratio = p.safety_fraction * self.friction_estimate if self.slip_seen else 0.0
-        history = self._history
-        filled = history.count >= history.force.shape[0]
-        judged = p.rotational_slip_detection and self.probing and filled
-        oldest = history.count % history.force.shape[0]                 # the slot the newest frame will take
-        signature, total_ratio, bearing, ratios = slip_signature(
-            force, ratio, contact, history.force[oldest], history.ratios[oldest], judged, self._plateau,
-            self.second_frame, hold_ratio, p.total_drop, p.force_drop, p.stick_exponent, p.loaded_share,
-            p.force_share, NOISE_MARGIN * self._ratio_noise)
-        history.force[oldest], history.ratios[oldest] = force, ratios
-        history.count += 1
-        self._streak = np.where(signature, self._streak + 1, 0)
-        if self._streak.max() < p.confirm_frames:
-            return
-        f, index = np.unravel_index(int(np.argmax(self._streak)), self._streak.shape)
-        # the grasp slid as a whole: its most loaded bumps are on their limit (under a moment the translational
-        # ratio is lower: a rotation); a single bump: its own ratio
-        measured = max(total_ratio, bearing) if index == len(self.centres) else float(ratios[f, index])
-        self.friction_estimate = min(self.friction_estimate, measured) if self.slip_seen else measured
-        self.slip_seen, self.probing = True, False
-        self.slip_events.append((self.time, self.friction_estimate))
-        self.command = min(max(self.command, self._target()), p.maximum_force)                # step up now
-        self._start_watch()
-
-    def _start_watch(self) -> None:
-        """(Re)start the watch: no plateau, no history, no streaks."""
-        self._plateau[:] = -1.0
-        self._history.count = 0
-        self._streak[:] = 0
-
-    # --- control steps (1 kHz) ----------------------------------------------------------------------------
-    def _target(self) -> float:
-        p = self.parameters
-        fraction = p.safety_fraction if (self.slip_seen or self.probing) else p.lift_safety_fraction
-        return self.need / (fraction * self.friction_estimate)
+        noise = np.zeros(self.contact.shape) if ratio_noise is None else ratio_noise
+        kind = observe_frame(np.ascontiguousarray(bump_force, dtype=float),
+                             np.ascontiguousarray(load_ratio, dtype=float),
+                             np.ascontiguousarray(in_contact, dtype=np.bool_),
+                             np.ascontiguousarray(noise, dtype=float), *self.arrays())
+        if kind:
+            self.slip_events.append((self.time, self.friction_estimate, SLIP_KINDS[kind]))
 
     def step(self, phase: GraspPhase) -> float:
         """One control step in ``phase`` -> grasp-force command [N]."""
-        p = self.parameters
-        self.time += self.period
-        if not isinstance(phase, GraspPhase):
-            phase = GraspPhase(phase)
-        if phase is not GraspPhase.RELEASE:
-            self._release = None
-        if phase is not GraspPhase.HOLD and self._hold_time > 0.0:
-            self._hold_time, self.probing, self._watching, self._probe_begun = 0.0, False, False, False
-            self._start_watch()
-        contacts = self._contacts
-        if phase is GraspPhase.APPROACH:
-            self.command = p.approach_force
-            self._latch_minimum(contacts)
-        elif phase is GraspPhase.RELEASE:
-            self._release_step()
-        elif self.minimum_force is None:
-            if not self._latch_minimum(contacts):
-                self.command = min(self.command + p.ramp_rate * self.period, p.maximum_force)
-        else:
-            if phase is GraspPhase.HOLD:
-                self._hold_step()
-            target = min(max(self._target(), self.minimum_force), p.maximum_force)
-            rate = p.loop_rate if target > self.command else p.release_loop_rate
-            self.command += rate * self.period * (target - self.command)
-        return self.command
+        return control_step(self.law, self.scalars, self.plateau, self.streak, PHASE_CODES[GraspPhase(phase)])
 
-    def _hold_step(self) -> None:
-        """Start the watch one window before the probe delay; probe (raise mu_hat) until a slip is seen."""
-        p = self.parameters
-        self._hold_time += self.period
-        # the watch starts one window before the probe, so that its window is full when the grip begins to fall
-        # (else the first window of the probe, 0.25 s and 13 % of mu_hat, goes by unwatched)
-        if not self._watching and self._hold_time >= p.probe_delay - p.watch_frames / p.frame_rate_hz:
-            self._watching = True
-        if self._hold_time < p.probe_delay:
-            return
-        if not self._probe_begun:
-            self._probe_begun, self.probing = True, not self.slip_seen
-        if self.probing:
-            self.friction_estimate = min(self.friction_estimate * math.exp(p.probe_rate * self.period),
-                                         p.maximum_friction)
+    @property
+    def command(self) -> float:
+        return float(self.scalars[X_COMMAND])
 
-    def _latch_minimum(self, contacts: int) -> bool:
-        if self.minimum_force is None and contacts >= 2:
-            self.minimum_force = self.command
-        return self.minimum_force is not None
+    @command.setter
+    def command(self, value: float) -> None:
+        self.scalars[X_COMMAND] = value
 
-    def _release_step(self) -> None:
-        """Lower the force once the tangential load leaves the fingertips (or at once if none was carried)."""
-        p = self.parameters
-        if self._release is None:
-            self._release = (self.need, self.command)
-        need_start, hold_force = self._release
-        change = 1.0 if need_start <= 0.0 else min(1.0, abs(self.need - need_start) / need_start)
-        self.command = max(self.command - p.release_rate * hold_force * change * self.period, 0.0)
+    @property
+    def minimum_force(self) -> float | None:
+        value = float(self.scalars[X_MINIMUM])
+        return None if math.isnan(value) else value
+
+    @minimum_force.setter
+    def minimum_force(self, value: float | None) -> None:
+        self.scalars[X_MINIMUM] = math.nan if value is None else value
+
+    @property
+    def friction_estimate(self) -> float:
+        return float(self.scalars[X_FRICTION])
+
+    @property
+    def need(self) -> float:
+        return float(self.scalars[X_NEED])
+
+    @property
+    def probing(self) -> bool:
+        return bool(self.scalars[X_PROBING])
+
+    @property
+    def slip_seen(self) -> bool:
+        return bool(self.scalars[X_SLIP_SEEN])
+
+    @property
+    def time(self) -> float:
+        return float(self.scalars[X_TIME])
+
+
+def law_parameters(parameters: IncipientSlipParameters, centres) -> np.ndarray:
+    """The parameter vector (P_SIZE,) the compiled law reads (``_slip_law``'s P_* slots)."""
+    values = np.zeros(P_SIZE)
+    reach = float(np.hypot(centres[:, 0], centres[:, 1]).max())
+    for slot, value in ((P_PERIOD, sample_period(parameters.sample_rate_hz)),
+                        (P_FAST_GAIN, tustin_gain(parameters.filter_cutoff_hz, parameters.frame_rate_hz)),
+                        (P_SLOW_GAIN, tustin_gain(parameters.watch_cutoff_hz, parameters.frame_rate_hz)),
+                        (P_APPROACH_FORCE, parameters.approach_force), (P_RAMP_RATE, parameters.ramp_rate),
+                        (P_MAXIMUM_FORCE, parameters.maximum_force), (P_LOOP_RATE, parameters.loop_rate),
+                        (P_RELEASE_LOOP_RATE, parameters.release_loop_rate), (P_SAFETY, parameters.safety_fraction),
+                        (P_LIFT_SAFETY, parameters.lift_safety_fraction),
+                        (P_PRIOR_FRICTION, parameters.prior_friction),
+                        (P_MAXIMUM_FRICTION, parameters.maximum_friction), (P_PROBE_RATE, parameters.probe_rate),
+                        (P_PROBE_DELAY, parameters.probe_delay), (P_TOTAL_DROP, parameters.total_drop),
+                        (P_WATCH_TIME, parameters.watch_frames / parameters.frame_rate_hz),
+                        (P_FORCE_DROP, parameters.force_drop), (P_STICK_EXPONENT, parameters.stick_exponent),
+                        (P_CONFIRM_FRAMES, parameters.confirm_frames), (P_LOADED_SHARE, parameters.loaded_share),
+                        (P_FORCE_SHARE, parameters.force_share), (P_RELEASE_RATE, parameters.release_rate),
+                        (P_ROTATIONAL, float(parameters.rotational_slip_detection)),
+                        (P_NOISE_MARGIN, NOISE_MARGIN), (P_FULL_SEARCH_EVERY, FULL_SEARCH_EVERY),
+                        (P_WARM_STEP, 0.1 * reach), (P_REACH, max(reach, 1.0)),
+                        (P_SCALE_GAIN, 1.0 - math.exp(-1.0 / (SCALE_TIME * parameters.frame_rate_hz))),
+                        (P_STALL_RISE, STALL_RISE), (P_STALL_FRACTION, STALL_FRACTION),
+                        (P_GROSS_FRAMES, min(max(round(GROSS_WINDOW * parameters.frame_rate_hz), 2),
+                                             parameters.watch_frames))):
+        values[slot] = value
+    return values

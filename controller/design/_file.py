@@ -29,16 +29,11 @@ message naming the key (and, for an invalid design, its axis values).
 from __future__ import annotations
 
 import dataclasses
-import sys
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from ._spec import DesignStudy, FingertipDesign
-
-if sys.version_info >= (3, 11):
-    import tomllib
-else:  # pragma: no cover
-    import tomli as tomllib
 
 __all__ = ["DesignSweepSpec", "load_design_file", "design_spec_from_dict"]
 
@@ -63,16 +58,16 @@ class DesignSweepSpec:
 
 
 def load_design_file(path, quick: bool = False) -> DesignSweepSpec:
-    """Read and validate a design file (``quick``: coarse meshes and two noise draws, for a fast look)."""
-    path = Path(path)
-    if not path.is_file():
-        raise FileNotFoundError(f"design file {str(path)!r} does not exist")
-    with path.open("rb") as stream:
-        try:
-            data = tomllib.load(stream)
-        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as error:
-            raise ValueError(f"{path}: not valid TOML ({error})") from None
-    return design_spec_from_dict(data, quick=quick, source=str(path))
+    """Read and validate a design file (``quick``: coarse meshes and two noise draws, for a fast look); every
+    message names the file. A missing file, a folder, a named pipe or a device, a file too large to be a design
+    file, or one that is not UTF-8 TOML is refused by ``contact.scene.read_toml_file``."""
+    from contact.scene import read_toml_file
+
+    data = read_toml_file(path, "design file")
+    try:
+        return design_spec_from_dict(data, quick=quick, source=str(path))
+    except ValueError as error:
+        raise ValueError(f"{path}: {error}") from None
 
 
 def _table(data: dict, key: str) -> dict:
@@ -86,7 +81,7 @@ def _build(cls, table: dict, section: str, prefix: str = ""):
     known = [f.name for f in dataclasses.fields(cls)]
     unknown = sorted(set(table) - set(known))
     if unknown:
-        raise ValueError(f"unknown key(s) {unknown} in [{section}]; allowed: {known}")
+        raise ValueError(f"{prefix}[{section}]: unknown key(s) {unknown} in [{section}]; allowed: {known}")
     values = {key: tuple(value) if isinstance(value, list) else value for key, value in table.items()}
     try:
         return cls(**values)
@@ -110,6 +105,7 @@ QUICK = {"size_contact": 0.7, "size_base": 1.5, "noise_draws": 2}   # --quick: t
 
 def design_spec_from_dict(data: dict, quick: bool = False, source: str = "") -> DesignSweepSpec:
     """DesignSweepSpec from a parsed design file; raises ValueError naming the offending key."""
+    from contact.budget import check_case_count
     from fem.task_runner import axis_points
 
     if not isinstance(data, dict):
@@ -123,19 +119,17 @@ def design_spec_from_dict(data: dict, quick: bool = False, source: str = "") -> 
         if not isinstance(text, str) or (key == "name" and not text):
             raise ValueError(f"{key}={text!r} must be a {'non-empty ' if key == 'name' else ''}string")
     name, description = texts["name"], texts["description"]
-    study_table = dict(_table(data, "study"))
-    if quick:
-        for key, value in QUICK.items():
-            if key == "noise_draws":
-                study_table[key] = min(int(study_table.get(key, value)), value)
-            else:
-                study_table[key] = max(float(study_table.get(key, value)), value)
-    study = _build(DesignStudy, study_table, "study")
+    study = _build(DesignStudy, dict(_table(data, "study")), "study")     # checked as written: no coercion first
+    if quick:                                                                 # then coarsened, never refined
+        study = dataclasses.replace(study, noise_draws=min(study.noise_draws, QUICK["noise_draws"]),
+                                    **{key: max(getattr(study, key), QUICK[key]) for key in ("size_contact",
+                                                                                              "size_base")})
     base = _table(data, "base")
     _build(FingertipDesign, base, "base")
     allowed = [f.name for f in dataclasses.fields(FingertipDesign)]
     grid = _axes(_table(data, "grid"), "grid", allowed)
     zipped = _axes(_table(data, "list"), "list", allowed)
+    check_case_count(math.prod(len(values) for _, values in grid) * (len(zipped[0][1]) if zipped else 1), "designs")
     designs, seen = [], {}
     for parameters in axis_points(grid, zipped):          # checks: no axis twice, equal [list] lengths
         point = dict(parameters)

@@ -17,10 +17,16 @@ The chain from pressure to a reading, each effect switchable (``CapacitiveNode``
 4. Crosstalk: each node's dC gains ``crosstalk`` times the dC of each of its four neighbours (the coupling of
    row-column scanned arrays through shared lines and fringe fields).
 5. Noise floor: Gaussian noise of ``noise_floor`` [pF] rms per node and frame (the converter's input noise).
+   A built array (``realize``: one draw per node, kept for its life) also has a gain spread (each pad's dC times
+   1 + ``gain_spread`` z, the dielectric's thickness and permittivity varying over the sheet), a baseline offset
+   (``offset_spread`` [pF] rms) and a baseline that drifts at a rate of ``offset_drift`` [pF/s] rms (temperature,
+   creep of the dielectric); all three enter dC before the converter, and the firmware knows none of them.
 6. ADC quantization: a bipolar converter of ``adc_bits`` over +-``adc_range``/2 [pF] rounds dC to its step and
    clips it to its range (saturation of the converter). ``adc_bits=0``: no converter.
-7. Read-out: the firmware inverts the nominal curve of 2-3 per node (without crosstalk or noise, which it cannot
-   know) and reports the pad force F = p w^2 [N]: the reading the estimator receives, at ``sample_rate_hz``.
+7. Read-out: the firmware inverts the nominal curve of 2-3 per node (without crosstalk, noise, gain or offset,
+   which it cannot know) and reports the pad force F = p w^2 [N]: the reading the estimator receives, at
+   ``sample_rate_hz``. Steps 2-7 are one compiled kernel (``_node_kernel.read_frame``), which the closed loop's
+   plant calls too.
 
 Defaults (``CapacitiveNode()``): eps_r = 3 over d_0 = 0.2 mm (c_area = 0.133 pF/mm^2, a silicone dielectric),
 E_d = 0.2 MPa and eps_max = 0.5 (a soft dielectric: 0.5 %/kPa at small pressure), 2 % crosstalk to each
@@ -40,7 +46,9 @@ import numpy as np
 
 from fem.validation import check_range
 
-__all__ = ["CapacitiveNode", "VACUUM_PERMITTIVITY"]
+from ._node_kernel import capacitance_changes, node_law, pressures, read_frame
+
+__all__ = ["CapacitiveNode", "NodeRealization", "VACUUM_PERMITTIVITY"]
 
 VACUUM_PERMITTIVITY = 8.8541878128e-3     # pF/mm
 
@@ -60,6 +68,9 @@ class CapacitiveNode:
     noise_floor : float -- rms noise of dC per node and frame [pF], >= 0; 0: off.
     adc_bits : int -- converter resolution [bits], 0 (no converter) or 4 ... 32.
     adc_range : float -- span of the bipolar converter [pF] (dC from -range/2 to +range/2), > 0.
+    gain_spread : float -- rms relative spread of the nodes' gains in a built array [-], in [0, 0.5].
+    offset_spread : float -- rms baseline offset of a node in a built array [pF], >= 0.
+    offset_drift : float -- rms rate of a node's baseline drift in a built array [pF/s], >= 0.
     """
 
     relative_permittivity: float = 3.0
@@ -71,6 +82,9 @@ class CapacitiveNode:
     noise_floor: float = 5e-4
     adc_bits: int = 16
     adc_range: float = 4.0
+    gain_spread: float = 0.02
+    offset_spread: float = 0.01
+    offset_drift: float = 2e-5
 
     def __post_init__(self):
         check_range("relative_permittivity", self.relative_permittivity, 0.0, math.inf, "", True, True)
@@ -85,11 +99,15 @@ class CapacitiveNode:
                 not (self.adc_bits == 0 or 4 <= self.adc_bits <= 32):
             raise ValueError(f"adc_bits={self.adc_bits!r} must be 0 (no converter) or an integer in [4, 32]")
         check_range("adc_range", self.adc_range, 0.0, math.inf, "pF", True, True)
+        check_range("gain_spread", self.gain_spread, 0.0, 0.5)
+        check_range("offset_spread", self.offset_spread, 0.0, math.inf, "pF", high_open=True)
+        check_range("offset_drift", self.offset_drift, 0.0, math.inf, "pF/s", high_open=True)
 
     @classmethod
     def ideal(cls) -> "CapacitiveNode":
         """Every effect off: a linear, noise-free, unquantized pad (the pad integral alone)."""
-        return cls(nonlinear=False, crosstalk=0.0, noise_floor=0.0, adc_bits=0)
+        return cls(nonlinear=False, crosstalk=0.0, noise_floor=0.0, adc_bits=0, gain_spread=0.0, offset_spread=0.0,
+                   offset_drift=0.0)
 
     @property
     def capacitance_per_area(self) -> float:
@@ -101,51 +119,71 @@ class CapacitiveNode:
         """Converter step [pF] (0 without a converter)."""
         return self.adc_range / 2**self.adc_bits if self.adc_bits else 0.0
 
-    def strain(self, pressure: np.ndarray) -> np.ndarray:
-        """Dielectric strain eps [-] at pad pressure p [MPa] (module docstring, step 2)."""
-        pressure = np.asarray(pressure, dtype=float)
-        linear = pressure / self.dielectric_modulus
-        if not self.nonlinear:
-            return linear
-        saturating = self.max_strain * -np.expm1(-np.maximum(linear, 0.0) / self.max_strain)
-        return np.where(pressure >= 0.0, saturating, linear)
-
-    def capacitance_change(self, pressure: np.ndarray, pad_area: float) -> np.ndarray:
+    def capacitance_change(self, pressure, pad_area: float) -> np.ndarray:
         """dC [pF] of a pad of ``pad_area`` [mm^2] at mean pressure p [MPa] (steps 2-3; linear: C_0 p / E_d)."""
-        strain = self.strain(pressure)
-        base = self.capacitance_per_area * pad_area
-        return base * (strain / (1.0 - strain) if self.nonlinear else strain)
+        return self._elementwise(capacitance_changes, pressure, pad_area)
 
-    def pressure_from_capacitance(self, change: np.ndarray, pad_area: float) -> np.ndarray:
+    def pressure_from_capacitance(self, change, pad_area: float) -> np.ndarray:
         """The firmware's inverse of ``capacitance_change`` [MPa]; beyond the saturated strain it returns the
         pressure at 1 - 1e-9 of it (a saturated node reads its maximum)."""
-        relative = np.asarray(change, dtype=float) / (self.capacitance_per_area * pad_area)
-        if not self.nonlinear:
-            return relative * self.dielectric_modulus
-        strain = relative / (1.0 + np.maximum(relative, -1.0 + 1e-12))
-        ceiling = self.max_strain * (1.0 - 1e-9)
-        positive = -self.max_strain * self.dielectric_modulus * np.log1p(-np.minimum(strain, ceiling) / self.max_strain)
-        return np.where(strain >= 0.0, positive, strain * self.dielectric_modulus)
+        return self._elementwise(pressures, change, pad_area)
 
-    def read(self, pad_force: np.ndarray, pad_area: float, rng=None) -> np.ndarray:
+    def _elementwise(self, kernel, values, pad_area: float) -> np.ndarray:
+        values = np.asarray(values, dtype=float)
+        out = np.empty(values.size)
+        kernel(np.ascontiguousarray(values).ravel(), node_law(self), float(pad_area), out)
+        return out.reshape(values.shape) if values.ndim else out[0]
+
+    def realize(self, shape: tuple[int, int], rng) -> "NodeRealization":
+        """One built array of ``shape`` (ny, nx) nodes: gains, offsets and drift rates drawn from ``rng`` (a
+        Generator or seed) with this node's spreads."""
+        rng = np.random.default_rng(rng)
+        return NodeRealization(1.0 + self.gain_spread * rng.standard_normal(shape),
+                               self.offset_spread * rng.standard_normal(shape),
+                               self.offset_drift * rng.standard_normal(shape))
+
+    def read(self, pad_force: np.ndarray, pad_area: float, rng=None, realization: "NodeRealization | None" = None,
+             time: float = 0.0) -> np.ndarray:
         """Readings [N] (t, ny, nx) of pads carrying ``pad_force`` [N] (t, ny, nx): steps 2-7 of the module docstring.
 
-        ``rng``: numpy Generator, seed or None, drawn from only when ``noise_floor`` > 0.
+        ``rng``: numpy Generator, seed or None, drawn from only when ``noise_floor`` > 0. ``realization``: the built
+        array's gains, offsets and drifts (None: every node nominal, no offset), its baseline at ``time`` [s] (of
+        every frame) or ``time`` (t,) per frame.
         """
-        change = self.capacitance_change(np.asarray(pad_force, dtype=float) / pad_area, pad_area)
-        if self.crosstalk > 0.0:
-            padded = np.pad(change, ((0, 0), (1, 1), (1, 1)))
-            change = change + self.crosstalk * (padded[:, :-2, 1:-1] + padded[:, 2:, 1:-1]
-                                                + padded[:, 1:-1, :-2] + padded[:, 1:-1, 2:])
-        if self.noise_floor > 0.0:
-            change = change + np.random.default_rng(rng).normal(0.0, self.noise_floor, change.shape)
-        if self.adc_bits:
-            step = self.adc_step
-            codes = np.clip(np.round(change / step), -2 ** (self.adc_bits - 1), 2 ** (self.adc_bits - 1) - 1)
-            change = codes * step
-        return self.pressure_from_capacitance(change, pad_area) * pad_area
+        pad_force = np.asarray(pad_force, dtype=float)
+        frames = pad_force.reshape((-1,) + pad_force.shape[-2:])
+        shape = frames.shape[1:]
+        noise = np.random.default_rng(rng).normal(0.0, self.noise_floor, frames.shape) if self.noise_floor > 0.0 \
+            else np.zeros(frames.shape)
+        realization = realization or NodeRealization(np.ones(shape), np.zeros(shape), np.zeros(shape))
+        times = np.broadcast_to(np.asarray(time, dtype=float), (len(frames),))
+        law, change, out = node_law(self), np.empty(shape), np.empty(frames.shape)
+        for index, frame in enumerate(frames):
+            read_frame(np.ascontiguousarray(frame), float(pad_area), law, realization.gain,
+                       realization.offset + times[index] * realization.drift, noise[index], change, out[index])
+        return out.reshape(pad_force.shape)
 
     def force_noise(self) -> float:
         """The noise floor as a pad force [N] at small pressure: noise_floor E_d / c_area (the same for any pad:
         a smaller pad carries less force, dC / dF = c_area / E_d stays)."""
         return self.noise_floor * self.dielectric_modulus / self.capacitance_per_area
+
+
+@dataclass(frozen=True, eq=False)
+class NodeRealization:
+    """One built array's nodes (``CapacitiveNode.realize``): gain (ny, nx) [-], baseline offset (ny, nx) [pF] and
+    baseline drift rate (ny, nx) [pF/s]."""
+
+    gain: np.ndarray
+    offset: np.ndarray
+    drift: np.ndarray
+
+    def __post_init__(self):
+        shapes = {np.shape(self.gain), np.shape(self.offset), np.shape(self.drift)}
+        if len(shapes) != 1 or len(next(iter(shapes))) != 2:
+            raise ValueError(f"node realization arrays must share one (ny, nx) shape, got {sorted(shapes)}")
+        for name in ("gain", "offset", "drift"):
+            value = np.ascontiguousarray(getattr(self, name), dtype=float)
+            if not np.all(np.isfinite(value)):
+                raise ValueError(f"node realization {name} has non-finite values")
+            object.__setattr__(self, name, value)

@@ -1,0 +1,279 @@
+"""The incipient-slip law (``controller.control.incipient_slip``, whose docstring states it) as compiled kernels on
+the controller's state arrays: ``observe_frame`` at each sensor frame, ``control_step`` at each control step.
+
+This is the one source of the law: ``IncipientSlipController`` is a thin Python wrapper that owns the arrays and
+calls these kernels, and the closed loop's fused frame loop (``controller.closed_loop._fused``) calls the same
+kernels on the same arrays without returning to Python. numba, because the law runs per frame on a few dozen bumps
+inside the closed loop, where Python's per-call overhead is larger than the arithmetic.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from fem.compiled import njit_cached
+
+from ._slip_kernels import fingertip_need, low_pass_frame, slip_signature
+from .references import GraspPhase
+
+__all__ = ["observe_frame", "control_step", "PHASE_CODES", "SLIP_KINDS"]
+
+PHASE_CODES = {phase: code for code, phase in enumerate(GraspPhase)}     # GraspPhase -> int for compiled code
+APPROACH, GRASP, LIFT, HOLD, PLACE, RELEASE = (PHASE_CODES[phase] for phase in GraspPhase)
+
+# --- scalar state slots ---------------------------------------------------------------------------------------
+(X_COMMAND, X_MINIMUM, X_FRICTION, X_PROBING, X_SLIP_SEEN, X_NEED, X_TIME, X_STARTED, X_CONTACTS, X_WATCHING,
+ X_PROBE_BEGUN, X_CARRY_TIME, X_RELEASING, X_RELEASE_NEED, X_RELEASE_FORCE, X_FRAMES, X_HISTORY, X_PHASE, X_GRIP,
+ X_CARRY_SLIP, X_SENSED, X_COMMAND_MEAN, X_SENSED_MEAN, X_USE_SLOW, X_SENSED_SLOW, X_PROBED, X_SIZE) = range(27)
+# --- parameter slots --------------------------------------------------------------------------------------------
+(P_PERIOD, P_FAST_GAIN, P_SLOW_GAIN, P_APPROACH_FORCE, P_RAMP_RATE, P_MAXIMUM_FORCE, P_LOOP_RATE,
+ P_RELEASE_LOOP_RATE, P_SAFETY, P_LIFT_SAFETY, P_PRIOR_FRICTION, P_MAXIMUM_FRICTION, P_PROBE_RATE, P_PROBE_DELAY,
+ P_TOTAL_DROP, P_WATCH_TIME, P_FORCE_DROP, P_STICK_EXPONENT, P_CONFIRM_FRAMES, P_LOADED_SHARE, P_FORCE_SHARE,
+ P_RELEASE_RATE, P_ROTATIONAL, P_NOISE_MARGIN, P_FULL_SEARCH_EVERY, P_WARM_STEP, P_REACH, P_SCALE_GAIN,
+ P_STALL_RISE, P_STALL_FRACTION, P_GROSS_FRAMES, P_SIZE) = range(32)
+# --- rows of the per-bump signals (5, 2, k) and of the ratio signals (4, 2, k, 2) -------------------------------
+FAST, FAST_PREVIOUS, SLOW, SLOW_PREVIOUS, RATIO_NOISE = range(5)
+MINIMUM_FRICTION = 0.05          # a slip measured at a lower ratio carried no load: it is not counted
+# what ``observe_frame`` saw: nothing, a single bump sliding, the grasp's carried load falling with its grip (gross
+# slip), the array's utilisation staying put while its grip fell (the array sliding as a whole)
+NO_SLIP, BUMP_SLIP, GROSS_SLIP, ARRAY_SLIP = range(4)
+SLIP_KINDS = {BUMP_SLIP: "bump", GROSS_SLIP: "gross", ARRAY_SLIP: "array"}
+
+
+@njit_cached(inline="always")
+def _first_min(a, b):
+    """min(a, b) that keeps a unless b is strictly smaller (a NaN b keeps a)."""
+    return b if b < a else a
+
+
+@njit_cached(inline="always")
+def _first_max(a, b):
+    """max(a, b) that keeps a unless b is strictly larger (a NaN b keeps a)."""
+    return b if b > a else a
+
+
+@njit_cached
+def _start_watch(scalars, plateau, streak, total):
+    """(Re)start the watch: no plateau (the total is watched when ``total``), no history, no streaks."""
+    plateau[0] = plateau[1] = -1.0                 # (unused) and the frame the total's watch began at
+    plateau[2] = 1.0 if total else 0.0
+    scalars[X_HISTORY] = 0.0
+    streak[:] = 0
+
+
+@njit_cached
+def _target(parameters, scalars):
+    """The grip [N] that holds the array at the safety fraction of its slip limit at mu_hat: the grip of the
+    readings times their utilisation nu = 1 / lambda*(1) over s mu_hat, both slowly filtered (the object swings in
+    the compliant fingers at a few Hz; a demand that followed the swing would drive it)."""
+    probing_or_seen = scalars[X_SLIP_SEEN] > 0.0 or scalars[X_PROBING] > 0.0
+    fraction = parameters[P_SAFETY] if probing_or_seen else parameters[P_LIFT_SAFETY]
+    return scalars[X_GRIP] * _first_min(scalars[X_USE_SLOW], 1e6) / (fraction * scalars[X_FRICTION])
+
+
+@njit_cached(inline="always")
+def _ema(value, target, gain):
+    return target if value == 0.0 else value + gain * (target - value)
+
+
+@njit_cached
+def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, centres, second_frame, scalars,
+                  contact, signals, ratios, plateau, history_force, history_ratios, history_use, streak, slip_centre):
+    """Take a sensor frame on the state arrays: bump forces (2, k) [N], load ratios (2, k, 2) [-],
+    in contact (2, k) bool, ratio noise (2, k) [-]. Returns what the slip watch saw (NO_SLIP, or the kind of slip:
+    the event is (scalars[X_TIME], scalars[X_FRICTION]))."""
+    count = centres.shape[0]
+    signals[RATIO_NOISE] = ratio_noise
+    restart = scalars[X_STARTED] == 0.0
+    contacts = 0
+    for f in range(2):
+        touching = 0
+        for i in range(count):
+            if in_contact[f, i] and not contact[f, i]:
+                restart = True
+            contact[f, i] = in_contact[f, i]
+            touching += 1 if in_contact[f, i] else 0
+        contacts = max(contacts, touching)
+    scalars[X_STARTED], scalars[X_CONTACTS] = 1.0, contacts
+    low_pass_frame(parameters[P_FAST_GAIN], bump_force, load_ratio, contact, signals[FAST_PREVIOUS],
+                   ratios[FAST_PREVIOUS], signals[FAST], ratios[FAST], restart)
+    low_pass_frame(parameters[P_SLOW_GAIN], signals[FAST], ratios[FAST], contact, signals[SLOW_PREVIOUS],
+                   ratios[SLOW_PREVIOUS], signals[SLOW], ratios[SLOW], restart)
+    scalars[X_FRAMES] += 1.0
+    full = int(scalars[X_FRAMES]) % int(parameters[P_FULL_SEARCH_EVERY]) == 0
+    use, sensed = fingertip_need(centres, signals[FAST], ratios[FAST], contact, parameters[P_ROTATIONAL] > 0.0,
+                                 slip_centre, full, parameters[P_WARM_STEP])
+    scalars[X_NEED], scalars[X_SENSED] = use, sensed
+    # the grip of these readings: the sensed force in the force loop's scale (the estimator's scale error, read off
+    # the command against the sensed force over a second; a lag of the grip behind its command averages out)
+    if sensed > 0.0:
+        scalars[X_COMMAND_MEAN] = _ema(scalars[X_COMMAND_MEAN], scalars[X_COMMAND], parameters[P_SCALE_GAIN])
+        scalars[X_SENSED_MEAN] = _ema(scalars[X_SENSED_MEAN], sensed, parameters[P_SCALE_GAIN])
+    scalars[X_USE_SLOW] = _ema(scalars[X_USE_SLOW], use, parameters[P_SLOW_GAIN])
+    scalars[X_SENSED_SLOW] = _ema(scalars[X_SENSED_SLOW], sensed, parameters[P_SLOW_GAIN])
+    scale = scalars[X_COMMAND_MEAN] / scalars[X_SENSED_MEAN] if scalars[X_SENSED_MEAN] > 0.0 else 1.0
+    # the slowly filtered grip: a fast one would feed the object's own swing in the fingers back into the demand
+    scalars[X_GRIP] = scalars[X_SENSED_SLOW] * _first_min(_first_max(scale, 0.5), 2.0)
+    if scalars[X_WATCHING] == 0.0:
+        return NO_SLIP
+    # the slip watch (module docstring of incipient_slip: per-bump ratios against their forces, the total load)
+    frames = history_force.shape[0]
+    seen = scalars[X_SLIP_SEEN] > 0.0
+    # once the friction is known and the grip holds, only loads above the hold level count as slip; while probing,
+    # every load does (the probe's mu_hat may be past the true friction)
+    hold_ratio = parameters[P_SAFETY] * scalars[X_FRICTION] if seen and scalars[X_PROBING] == 0.0 else 0.0
+    written = int(scalars[X_HISTORY])
+    # while probing, once the window lies in the probe (before it the grip followed the load: no test can tell a load
+    # that fell from a grasp that slid); after a slip, the total above the hold level
+    probed = scalars[X_PROBING] > 0.0 and scalars[X_PROBED] >= parameters[P_WATCH_TIME]
+    judged = parameters[P_ROTATIONAL] > 0.0 and probed and written >= frames
+    watch_total = (parameters[P_TOTAL_DROP] < 1.0 and plateau[2] > 0.0
+                   and (probed or (seen and scalars[X_PROBING] == 0.0)))
+    oldest = written % frames
+    # a bump's ratio against its value a window ago, both through the slow filter (variance times its gain b):
+    # the difference has sqrt(2 b) of the raw noise; the margin is NOISE_MARGIN of that
+    noise = parameters[P_NOISE_MARGIN] * math.sqrt(2.0 * parameters[P_SLOW_GAIN]) * signals[RATIO_NOISE]
+    wrench_noise = 0.0                       # the carried wrench's noise, from each bump's: sqrt(sum (P_i s_i)^2)
+    for f in range(2):
+        for i in range(count):
+            if contact[f, i]:
+                wrench_noise += (signals[FAST, f, i] * signals[RATIO_NOISE, f, i]) ** 2
+    wrench_noise = parameters[P_NOISE_MARGIN] * math.sqrt(wrench_noise)
+    use_now = np.array([scalars[X_USE_SLOW], scalars[X_SENSED_SLOW]])
+    use_then = history_use[oldest, :2] if written >= frames else np.zeros(2)
+    # the carried wrench's reference: its largest value (and the grip's) over the last GROSS_FRAMES frames
+    window = int(parameters[P_GROSS_FRAMES])
+    reference = np.full(3, -1.0)
+    if written >= window:
+        for back in range(1, window + 1):
+            row = (written - back) % frames
+            for column in range(3):
+                reference[column] = max(reference[column], history_use[row, 2 + column])
+    carried = np.zeros(3)
+    # the array as a whole: against the probe's falling grip, or, in the lift, a load-driven grip (above the
+    # minimum force) whose load stopped growing below what it carries
+    lifting = scalars[X_PHASE] == LIFT and scalars[X_COMMAND] > 1.05 * scalars[X_MINIMUM] and not seen
+    use_mode = 1 if probed else (2 if lifting and parameters[P_STALL_FRACTION] > 0.0 else 0)
+    signature, total_ratio, bearing, magnitudes = slip_signature(
+        signals[SLOW], ratios[SLOW], signals[FAST], ratios[FAST], contact, centres, history_force[oldest],
+        history_ratios[oldest], judged, watch_total, reference, carried, second_frame, hold_ratio,
+        parameters[P_TOTAL_DROP],
+        parameters[P_FORCE_DROP], parameters[P_STICK_EXPONENT], parameters[P_LOADED_SHARE],
+        parameters[P_FORCE_SHARE], noise, wrench_noise, parameters[P_REACH], use_now, use_then,
+        # the utilisation's noise: the per-bump noise pooled, through the slow filter (variance times its gain b)
+        # and the window's difference (twice that): sqrt(2 b) of the raw margin
+        math.sqrt(2.0 * parameters[P_SLOW_GAIN]) * wrench_noise / max(sensed, 1e-9), use_mode,
+        parameters[P_LIFT_SAFETY] * scalars[X_FRICTION],
+        parameters[P_STALL_RISE], parameters[P_STALL_FRACTION])
+    history_force[oldest] = signals[SLOW]
+    history_ratios[oldest] = magnitudes
+    history_use[oldest, :2] = use_now
+    history_use[oldest, 2:] = carried
+    scalars[X_HISTORY] = written + 1
+    confirm = parameters[P_CONFIRM_FRAMES]
+    finger, index, measured = 0, -1, 0.0
+    for f in range(2):
+        for i in range(count + 1):
+            streak[f, i] = streak[f, i] + 1 if signature[f, i] else 0
+    # a bump slip counts when two bumps of one fingertip show it: an array starts to slide at more than one bump
+    # (the outer ones in a pair under a moment, all under a force), while noise flags bumps one at a time
+    for f in range(2):
+        flagged, largest = 0, 0.0
+        for i in range(count):
+            if streak[f, i] >= confirm:
+                flagged += 1
+                largest = _first_max(largest, magnitudes[f, i])
+        if flagged >= 2 and largest > measured:
+            finger, index, measured = f, 0, largest
+    if index < 0:
+        # the array slides as a whole: at its limit, lambda*(mu) = 1, so its utilisation nu = 1 / lambda*(1) is mu
+        # (any mode, translation or rotation: the bumps' largest ratio overshoots it under a moment)
+        if streak[0, count] >= confirm:                             # the grasp slid as a whole, its load fell
+            finger, index, measured = 0, count, scalars[X_NEED]
+        elif streak[1, count] >= confirm:                           # the array's utilisation stayed at mu
+            finger, index, measured = 1, count, scalars[X_NEED]
+        else:
+            return NO_SLIP
+    if not measured >= MINIMUM_FRICTION:     # no load to speak of (or none at all): not a friction measurement
+        streak[finger, index] = 0
+        return NO_SLIP
+    scalars[X_FRICTION] = _first_min(scalars[X_FRICTION], measured) if seen else measured
+    scalars[X_SLIP_SEEN], scalars[X_PROBING] = 1.0, 0.0
+    scalars[X_CARRY_SLIP] = 1.0
+    # step up at once, by at least twice the safety margin: a grasp that slid carried less than its load while
+    # sliding, so the demand read off its loads is short of what holds it, and what slides has gathered momentum
+    step_up = _first_max(_first_max(scalars[X_COMMAND], _target(parameters, scalars)),
+                         scalars[X_COMMAND] / parameters[P_SAFETY] ** 2)
+    scalars[X_COMMAND] = _first_min(step_up, parameters[P_MAXIMUM_FORCE])
+    _start_watch(scalars, plateau, streak, True)
+    return BUMP_SLIP if index < count else (GROSS_SLIP if finger == 0 else ARRAY_SLIP)
+
+
+@njit_cached
+def _latch_minimum(scalars):
+    if math.isnan(scalars[X_MINIMUM]) and scalars[X_CONTACTS] >= 2:
+        scalars[X_MINIMUM] = scalars[X_COMMAND]
+    return not math.isnan(scalars[X_MINIMUM])
+
+
+@njit_cached
+def control_step(parameters, scalars, plateau, streak, phase):
+    """One control step on the state arrays, ``phase`` a ``PHASE_CODES`` value -> command [N]."""
+    period = parameters[P_PERIOD]
+    scalars[X_TIME] += period
+    if phase != RELEASE:
+        scalars[X_RELEASING] = 0.0
+    if phase != scalars[X_PHASE]:
+        carrying = scalars[X_PHASE] == LIFT and phase == HOLD      # the watch and the probe go on through both
+        scalars[X_PHASE] = phase
+        if not carrying:
+            scalars[X_CARRY_TIME] = scalars[X_PROBING] = scalars[X_PROBE_BEGUN] = 0.0
+            # the lift is watched from its start (a friction below the prior slides it), the total from the probe
+            scalars[X_WATCHING] = 1.0 if phase == LIFT else 0.0
+            _start_watch(scalars, plateau, streak, False)
+    if phase == APPROACH:
+        scalars[X_COMMAND] = parameters[P_APPROACH_FORCE]
+        _latch_minimum(scalars)
+    elif phase == RELEASE:
+        if scalars[X_RELEASING] == 0.0:
+            scalars[X_RELEASING], scalars[X_RELEASE_NEED], scalars[X_RELEASE_FORCE] = 1.0, scalars[X_NEED], \
+                scalars[X_COMMAND]
+        need_start = scalars[X_RELEASE_NEED]
+        change = 1.0 if need_start <= 0.0 else _first_min(1.0, abs(scalars[X_NEED] - need_start) / need_start)
+        scalars[X_COMMAND] = _first_max(scalars[X_COMMAND] - parameters[P_RELEASE_RATE] * scalars[X_RELEASE_FORCE]
+                                        * change * period, 0.0)
+    elif math.isnan(scalars[X_MINIMUM]):
+        if not _latch_minimum(scalars):
+            scalars[X_COMMAND] = _first_min(scalars[X_COMMAND] + parameters[P_RAMP_RATE] * period,
+                                            parameters[P_MAXIMUM_FORCE])
+    else:
+        if phase == LIFT or phase == HOLD:
+            _carry_step(parameters, scalars, plateau, streak, period)
+        target = _first_max(_target(parameters, scalars), scalars[X_MINIMUM])
+        target = _first_min(target, parameters[P_MAXIMUM_FORCE])
+        rate = parameters[P_LOOP_RATE] if target > scalars[X_COMMAND] else parameters[P_RELEASE_LOOP_RATE]
+        scalars[X_COMMAND] += rate * period * (target - scalars[X_COMMAND])
+    return scalars[X_COMMAND]
+
+
+@njit_cached
+def _carry_step(parameters, scalars, plateau, streak, period):
+    """While the object is carried (lift, then hold): watch the total one window before the probe delay (counted
+    from the lift's start: the weight is long off the table and the lift's load is steady to 0.5 %); probe (raise
+    mu_hat) until a slip is seen."""
+    scalars[X_CARRY_TIME] += period
+    if plateau[2] == 0.0 and scalars[X_CARRY_TIME] >= parameters[P_PROBE_DELAY] - parameters[P_WATCH_TIME]:
+        scalars[X_WATCHING] = plateau[2] = 1.0
+    if scalars[X_CARRY_TIME] < parameters[P_PROBE_DELAY]:
+        return
+    if scalars[X_PROBE_BEGUN] == 0.0:
+        scalars[X_PROBE_BEGUN] = 1.0
+        scalars[X_PROBING] = 0.0 if scalars[X_CARRY_SLIP] > 0.0 else 1.0
+        if scalars[X_PROBING] > 0.0:        # the probe's margin is the hold's: mu_hat starts where the grip is
+            scalars[X_FRICTION] *= parameters[P_LIFT_SAFETY] / parameters[P_SAFETY]
+            scalars[X_PROBED] = 0.0
+    if scalars[X_PROBING] > 0.0:
+        scalars[X_PROBED] += period
+        scalars[X_FRICTION] = _first_min(scalars[X_FRICTION] * math.exp(parameters[P_PROBE_RATE] * period),
+                                         parameters[P_MAXIMUM_FRICTION])
