@@ -27,17 +27,17 @@ def _band(axis, top):
 
 def _errors(axis, rows, problems, title, xlabel):
     top = 0.0
-    if not any(r["problem"] == problem and np.isfinite(r["error_fem_vs_neo_hooke"]) for r in rows
+    if not any(r["problem"] == problem and np.isfinite(r["judged_error"]) for r in rows
                for problem, _ in problems):
         axis.text(0.5, 0.5, "no Neo-Hookean CalculiX result (see the summary's calculix_failed)", ha="center",
                   transform=axis.transAxes, fontsize=8)
     for problem, line in problems:
         for quantity in dict.fromkeys(r["quantity"] for r in rows if r["problem"] == problem):
             series = sorted((r for r in rows if r["problem"] == problem and r["quantity"] == quantity
-                             and np.isfinite(r["error_fem_vs_neo_hooke"])), key=lambda r: r["load"])
+                             and np.isfinite(r["judged_error"])), key=lambda r: r["load"])
             if not series:
                 continue
-            ratio = np.array([r["error_fem_vs_neo_hooke"] / r["tolerance"] for r in series])
+            ratio = np.array([r["judged_error"] / r["tolerance"] for r in series])
             colour, marker = QUANTITY_STYLE[quantity]
             axis.plot([r["load"] for r in series], ratio, marker=marker, ls=line, color=colour, ms=4,
                       label=f"{quantity.replace('_', ' ')} ({series[0]['tolerance']:g}"
@@ -103,7 +103,7 @@ def plot(rows, fem_sphere, calculix, fem_paths, sphere, bump, found, wall):
     _errors(axes[1, 1], rows, (("bump_shear", "-"),), "Shear: at equal load ratio", "load ratio Q / (mu P)")
     _errors(axes[1, 2], rows, (("bump_twist", "-"),), "Twist: at equal torque ratio", "T / (mu P a)  [-]")
     outside = sorted({r["quantity"].replace("_", " ") for r in rows if r["problem"] != "sphere_press"
-                      and r.get("resolved", True) and np.isfinite(r["error_fem_vs_neo_hooke"])
+                      and r.get("resolved", True) and np.isfinite(r["judged_error"])
                       and not r["within_tolerance"]})
     fig.suptitle("Small strain against finite strain (compressible Neo-Hookean, CalculiX): "
                  + (f"outside at the paper's loads: {', '.join(outside)}" if outside else

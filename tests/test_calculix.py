@@ -84,6 +84,8 @@ def test_decks_state_the_gel_law_and_the_contact():
     twist = bump_deck(mesh, GelLaw.LINEAR, 0.3, 0.45, 1.0, 1.5, "twist", 0.6, 3, 40.0)
     assert twist.count("*STEP") == 4 and "TYPE=MORTAR" in twist and twist.count("*CHANGE FRICTION") == 1
     assert "*FRICTION\n0.001,100\n" in twist and "*FRICTION\n1,100\n" in twist       # friction on after the press
+    rough = bump_deck(mesh, GelLaw.LINEAR, 0.3, 0.45, 1.0, 1.5, "twist", 0.6, 3, 40.0, frictional_press=True)
+    assert "*CHANGE FRICTION" not in rough and "*FRICTION\n1,100\n" in rough and "0.001,100" not in rough
     with pytest.raises(ValueError, match="needs the half bump mesh"):
         bump_deck(mesh, GelLaw.LINEAR, 0.3, 0.45, 1.0, 1.5, "shear", 1.0, 3, 40.0)
 

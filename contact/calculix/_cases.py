@@ -15,7 +15,7 @@ from contact.calculix._deck import GelLaw, bump_deck, sphere_press_deck
 from contact.calculix._files import read_dat, read_frd
 from contact.calculix._mesh import axisymmetric_bump, axisymmetric_layer, bump
 from contact.calculix._run import CalculixFailed, run_deck, run_seconds
-from fem.validation import check_all, check_integer, check_positive, check_range, parse_choice
+from fem.validation import check_all, check_bool, check_integer, check_positive, check_range, parse_choice
 
 __all__ = ["CalculixJob", "SpherePress", "PressRecord", "sphere_press_job", "sphere_press", "BumpSetup", "BumpRecord",
            "bump_job", "bump_path", "bump_press_job", "SLIP_TOLERANCE"]
@@ -175,6 +175,7 @@ class BumpSetup:
     increments: int = 10
     size_contact: float = 0.5
     size_far: float = 1.5
+    frictional_press: bool = False   # friction on in the press too (else nearly frictionless, then switched on)
 
     def __post_init__(self):
         check_all(*[lambda name=name: check_positive(name, getattr(self, name), "mm")
@@ -183,6 +184,7 @@ class BumpSetup:
                   lambda: check_range("depth", self.depth, 0.0, 0.6 * self.bump_radius, "mm", low_open=True),
                   lambda: check_range("friction_coefficient", self.friction_coefficient, 0.0, 5.0, low_open=True),
                   lambda: check_range("twist_angle", self.twist_angle, 0.0, 2.0, "rad", low_open=True),
+                  lambda: check_bool("frictional_press", self.frictional_press),
                   lambda: check_integer("increments", self.increments, 2, 1000))
 
     @property
@@ -274,7 +276,8 @@ def bump_job(setup: BumpSetup, law: GelLaw | str, path: str) -> CalculixJob:
     target = setup.shear_shift if path == "shear" else setup.twist_angle
     plate_width = 3.0 * setup.base_width
     decks = tuple(bump_deck(mesh, law, setup.youngs_modulus, setup.poissons_ratio, setup.friction_coefficient,
-                            setup.depth, path, target, setup.increments, plate_width, press_increments=press)
+                            setup.depth, path, target, setup.increments, plate_width, press_increments=press,
+                            frictional_press=setup.frictional_press)
                   for press in PRESS_INCREMENTS)
     plate_nodes = _plate(mesh.nodes.shape[0] + 1, plate_width, 8, half)[0]
     centre = mesh.nodes.shape[0] + 1 + int(np.flatnonzero(np.all(np.abs(plate_nodes) < 1e-9, axis=1))[0])

@@ -125,14 +125,15 @@ def _plate_motion(nodes: np.ndarray, numbers: np.ndarray, depth: float, shift: f
 
 def bump_deck(mesh, law: GelLaw, youngs_modulus: float, poissons_ratio: float, friction_coefficient: float,
               depth: float, path: str, target: float, increments: int, plate_width: float,
-              press_increments: int = 6) -> str:
+              press_increments: int = 6, frictional_press: bool = False) -> str:
     """A bump under a rigid plate, CalculiX mortar contact (hard; Coulomb friction with ``friction_coefficient``, stuck
     points held by STICK_SLOPE):
     step 1 presses it by ``depth`` [mm] in ``press_increments`` increments (friction PRESS_FRICTION); then, at that
     depth and with friction on, the plate is shifted
     along +x (``path='shear'``, one step of ``increments`` increments, half model) or turned about z through the bump
     axis (``'twist'``, ``increments`` steps of one rigid turn each, whole model) to ``target`` [mm or rad].
-    The plate's nodes are prescribed (a rigid body's constraint equations would sit on the mortar surfaces). Prints
+    ``frictional_press``: friction ``friction_coefficient`` from the start (no *CHANGE FRICTION; the Neo-Hookean gel
+    diverges at that change). The plate's nodes are prescribed (a rigid body's constraint equations would sit on the mortar surfaces). Prints
     the base reactions; writes displacements and contact stresses of every increment."""
     if path not in ("shear", "twist"):
         raise ValueError(f"path={path!r}; allowed: 'shear', 'twist'")
@@ -144,7 +145,9 @@ def bump_deck(mesh, law: GelLaw, youngs_modulus: float, poissons_ratio: float, f
     numbers = np.arange(first, first + plate_nodes.shape[0])
     output = "*NODE PRINT,NSET=BASE,TOTALS=YES\nRF\n*NODE FILE\nU\n*CONTACT FILE\nCSTR\n"
     symmetry = (_nset("MIRROR", np.setdiff1d(mesh.mirror, mesh.base)) + "*BOUNDARY\nMIRROR,2,2\n") if mesh.half else ""
-    friction = (f"*CHANGE FRICTION,INTERACTION=CONTACT\n*FRICTION\n{friction_coefficient:.10g},{STICK_SLOPE:g}\n")
+    friction = ("" if frictional_press else
+                f"*CHANGE FRICTION,INTERACTION=CONTACT\n*FRICTION\n{friction_coefficient:.10g},{STICK_SLOPE:g}\n")
+    press_friction = friction_coefficient if frictional_press else PRESS_FRICTION
     if path == "shear":
         motion = _step(law, 1.0 / increments, friction + _plate_motion(plate_nodes, numbers, depth, target, 0.0)
                        + output)
@@ -159,7 +162,7 @@ def bump_deck(mesh, law: GelLaw, youngs_modulus: float, poissons_ratio: float, f
                                                  np.ones(plate_hexes.shape[0], int)]))
             + material_card(law, youngs_modulus, poissons_ratio) + "*MATERIAL,NAME=RIGID\n*ELASTIC\n1e6,0.3\n"
             + "*SOLID SECTION,ELSET=GEL,MATERIAL=GEL\n*SOLID SECTION,ELSET=PLATE,MATERIAL=RIGID\n"
-            + f"*SURFACE INTERACTION,NAME=CONTACT\n*FRICTION\n{PRESS_FRICTION:g},{STICK_SLOPE:g}\n"
+            + f"*SURFACE INTERACTION,NAME=CONTACT\n*FRICTION\n{press_friction:g},{STICK_SLOPE:g}\n"
             + "*CONTACT PAIR,INTERACTION=CONTACT,TYPE=MORTAR\nBUMP,PLATE\n" + "*BOUNDARY\nBASE,1,3\n" + symmetry
             + _step(law, 1.0 / press_increments, _plate_motion(plate_nodes, numbers, depth, 0.0, 0.0) + output)
             + motion)

@@ -42,5 +42,6 @@ def bump_scene(setup, path: str, values, press_forces=(), size_contact: float = 
         loads += (Load(kind, "displacement", tuple(float(v) for v in values)),)
     return Scene(name=f"finite_strain_bump_{path}", gel=gel,
                  material=Material(setup.youngs_modulus, setup.poissons_ratio), body=BodySpec("plane"),
-                 contact=ContactSpec(friction_coefficient=setup.friction_coefficient, frictionless_press=True),
+                 contact=ContactSpec(friction_coefficient=setup.friction_coefficient,
+                                     frictionless_press=not setup.frictional_press),
                  mesh=MeshSettings(size_contact=size_contact, size_far=3.0, size_base=size_base), loads=loads)
