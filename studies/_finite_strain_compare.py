@@ -163,16 +163,17 @@ def envelope(rows: list[dict]) -> dict:
     return found
 
 
-SHEAR_AND_TWIST_QUANTITIES = (("tangential_compliance", "shear"), ("stick_ratio", "shear"), ("base_cop_shift", "shear"),
-                              ("torsional_compliance", "twist"), ("stick_ratio_twist", "twist"))
+SHEAR_AND_TWIST_QUANTITIES = (("tangential_compliance", "shear"), ("stick_ratio", "shear"),
+                              ("base_cop_shift", "shear"), ("torsional_compliance", "twist"),
+                              ("stick_ratio_twist", "twist"))
 
 
 def envelope_bounds(found: dict, hold_contact_width: float, measured: str, unmeasured: str = "") -> list:
     """The envelope as ``contact.envelope.EnvelopeBound`` s: per quantity the tightest bound over the problems that
-    measured it. A press quantity holds to the a/R of its last row within tolerance (``envelope``); a shear or twist quantity to its last load ratio within tolerance, at
-    ``hold_contact_width`` (the FEM bump's a/R at the held depth). ``measured`` names the run. A shear or twist
-    quantity without a Neo-Hookean value is bounded by the tightest press bound, marked ``assumed`` with the reason
-    ``unmeasured``."""
+    measured it. A press quantity holds to the a/R of its last row within tolerance (``envelope``); a shear or twist
+    quantity to its last load ratio within tolerance, at ``hold_contact_width`` (the FEM bump's a/R at the held
+    depth). ``measured`` names the run. A shear or twist quantity without a Neo-Hookean value is bounded by the
+    tightest press bound, marked ``assumed`` with the reason ``unmeasured``."""
     from contact.envelope import EnvelopeBound
 
     tightest = {}

@@ -41,7 +41,8 @@ PEAK_BUMP_FORCE = 2.6
 HOLD_BUMP_FORCE = 1.5
 HOLD_PRESS_FORCES = tuple(f for f in PRESS_FORCES if f <= HOLD_BUMP_FORCE)
 # per path: press with friction on from the start (both codes), or nearly frictionless and friction switched on at
-# the hold (CalculiX's Neo-Hookean gel diverges at that switch: residual ~1600 N, too many cutbacks)
+# the hold (CalculiX's Neo-Hookean gel diverges at that switch: residual ~1600 N, too many cutbacks). With friction
+# from the start CalculiX 2.20 stops inside spooles (exit code 255) during the press, linear and Neo-Hookean alike
 FRICTIONAL_PRESS = {"shear": False, "twist": False}
 PRESS_REACH = 1.15          # the axisymmetric CalculiX press goes this far past the FEM's depth at the peak force
 SPHERE_FORCES = (0.05, 0.15, 0.3, 0.5, 0.8, 1.2, 1.7, 2.3, 3.0, 3.6, 4.4)   # N: d = 0.12 ... 1.98 mm

@@ -133,8 +133,8 @@ def bump_deck(mesh, law: GelLaw, youngs_modulus: float, poissons_ratio: float, f
     along +x (``path='shear'``, one step of ``increments`` increments, half model) or turned about z through the bump
     axis (``'twist'``, ``increments`` steps of one rigid turn each, whole model) to ``target`` [mm or rad].
     ``frictional_press``: friction ``friction_coefficient`` from the start (no *CHANGE FRICTION; the Neo-Hookean gel
-    diverges at that change). The plate's nodes are prescribed (a rigid body's constraint equations would sit on the mortar surfaces). Prints
-    the base reactions; writes displacements and contact stresses of every increment."""
+    diverges at that change). The plate's nodes are prescribed (a rigid body's constraint equations would sit on the
+    mortar surfaces). Prints the base reactions; writes displacements and contact stresses of every increment."""
     if path not in ("shear", "twist"):
         raise ValueError(f"path={path!r}; allowed: 'shear', 'twist'")
     if (path == "shear") != mesh.half:
