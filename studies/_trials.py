@@ -26,8 +26,8 @@ from studies._output import write_csv_atomic
 @functools.lru_cache(maxsize=1)
 def closed_loop_sources() -> str:
     """SHA-256 of the sources a trial runs (every file of the controller and contact packages, the calibration
-    data included): an edit of the controller or the fingertip model makes every stored trial stale, where the
-    package version of an editable install would not change."""
+    data and the plant's FEM base response included): an edit of the controller or the fingertip model makes every
+    stored trial stale, where the package version of an editable install would not change."""
     import contact
     import controller
 
@@ -35,7 +35,7 @@ def closed_loop_sources() -> str:
     for package in (controller, contact):
         root = Path(package.__file__).parent
         for path in sorted(root.rglob("*")):
-            if path.suffix in (".py", ".json") and "__pycache__" not in path.parts:
+            if path.suffix in (".py", ".json", ".npz") and "__pycache__" not in path.parts:
                 digest.update(path.relative_to(root.parent).as_posix().encode())
                 digest.update(path.read_bytes())
     return digest.hexdigest()
@@ -101,9 +101,14 @@ def run_trial_table(path: Path, jobs: list[tuple[str, object, object, dict]], ro
     from controller.closed_loop import map_trials, run_trial
 
     keys = [job[0] for job in jobs]
-    written = {key: row for key, row in _read(path).items() if key in set(keys)}   # as on disk: their checks hold
+    on_disk = _read(path)
+    written = {key: row for key, row in on_disk.items() if key in set(keys)}   # as on disk: their checks hold
     rows = {key: coerce(value) for key, value in written.items()}
     missing = [job for job in jobs if job[0] not in rows]
+    if missing and len(on_disk) > len(written):
+        warnings.warn(f"trial table {str(path)!r}: {len(on_disk) - len(written)} of its rows belong to another plan "
+                      f"or to other closed-loop sources (an edit of controller/ or contact/ makes every trial stale) "
+                      f"and are not kept; this run's {len(keys)} trials replace them", TrialRowWarning, stacklevel=2)
     if missing:
         results = map_trials(functools.partial(_with_required_force, function or run_trial),
                              [(obj, settings) for _, obj, settings, _ in missing], processes, progress=label)

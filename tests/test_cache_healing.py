@@ -85,7 +85,8 @@ def test_a_column_set_of_another_shape_is_named_and_replaced(fresh_cache):
         warnings.simplefilter("always")
         result = _solve()
     (message,) = _cache_warnings(caught)
-    assert str(stored) in message and f"{values.shape[0] - 3} rows where this compliance has {values.shape[0]}" in message
+    assert str(stored) in message
+    assert f"{values.shape[0] - 3} rows where this compliance has {values.shape[0]}" in message
     assert result.timings["compliance_columns_loaded"] == 0
 
 
@@ -211,6 +212,27 @@ def test_damaged_trial_rows_are_skipped_with_one_warning_and_run_again(tmp_path)
     calls.clear()
     assert run_trial_table(path, jobs, row, processes=1, function=_grip_of) == first and not calls   # rebuilt
 
+
+
+def test_trial_rows_of_another_plan_are_named_before_they_are_replaced(tmp_path):
+    pytest.importorskip("mujoco")
+    from studies._trials import TrialRowWarning, run_trial_table
+
+    from controller.closed_loop import GraspObject, TrialSettings
+
+    box = GraspObject("box", 0.1, (0.06, 0.05, 0.08), 0.0, 0.04)
+
+    def jobs(*mus):
+        return [(f"{round(100 * mu):016x}", box, TrialSettings(friction_coefficient=mu), {"mu": mu}) for mu in mus]
+
+    def row(value, info):
+        return {"mu": info["mu"], "grip": value, "required": info["required"]}
+
+    path = tmp_path / "trials.csv"
+    run_trial_table(path, jobs(0.5, 0.7), row, processes=1, function=_grip_of)
+    with pytest.warns(TrialRowWarning, match=r"trials.csv': 1 of its rows belong to another plan"):
+        rows = run_trial_table(path, jobs(0.5, 0.9), row, processes=1, function=_grip_of)   # 0.7 is not asked for
+    assert [r["mu"] for r in rows] == [0.5, 0.9] and len(path.read_text().splitlines()) == 3
 
 def _grip_of(obj, settings):
     """A stand-in for a trial: the slip-limit grip force at twice the friction (deterministic, fast) [N]."""
