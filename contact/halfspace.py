@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.signal import fftconvolve
 
-from contact.scene import LoadKind, Scene
+from contact.scene import BodyShape, GelShape, LoadKind, Scene
 
 __all__ = ["HalfSpaceCompliance", "HalfSpaceIncrement", "cell_integrals", "grid_triangles", "solve_halfspace",
            "coupled_reference"]
@@ -56,14 +56,16 @@ def cell_integrals(x: np.ndarray, y: np.ndarray, spacing: float) -> dict[str, np
     return {"1/rho": inverse, "xx/rho3": xx, "yy/rho3": yy, "xy/rho3": xy, "x/rho2": x_over, "y/rho2": y_over}
 
 
-def _kernel(shear_modulus: float, poissons_ratio: float, spacing: float, reach_x: int, reach_y: int) -> np.ndarray:
+def _kernel(shear_modulus: float, poissons_ratio: float, spacing: float, reach_x: int, reach_y: int,
+            coupled: bool = True) -> np.ndarray:
     """(3, 3, 2 reach_x + 1, 2 reach_y + 1) displacement [mm/N] at offsets (i h, j h) from a cell carrying a unit
-    force spread uniformly over it, component a due to force component b."""
+    force spread uniformly over it, component a due to force component b; ``coupled=False`` drops the (1 - 2 nu)
+    terms (Goodman's approximation, the closed forms' assumption: docs/theory.md, sec. 8.1)."""
     i, j = np.meshgrid(np.arange(-reach_x, reach_x + 1), np.arange(-reach_y, reach_y + 1), indexing="ij")
     integrals = cell_integrals(i * spacing, j * spacing, spacing)
     nu = poissons_ratio
     tangential = 1.0 / (2.0 * math.pi * shear_modulus * spacing**2)
-    coupling = (1.0 - 2.0 * nu) / (4.0 * math.pi * shear_modulus * spacing**2)
+    coupling = (1.0 - 2.0 * nu) / (4.0 * math.pi * shear_modulus * spacing**2) if coupled else 0.0
     kernel = np.empty((3, 3) + i.shape)
     kernel[0, 0] = tangential * ((1.0 - nu) * integrals["1/rho"] + nu * integrals["xx/rho3"])
     kernel[1, 1] = tangential * ((1.0 - nu) * integrals["1/rho"] + nu * integrals["yy/rho3"])
@@ -76,18 +78,22 @@ def _kernel(shear_modulus: float, poissons_ratio: float, spacing: float, reach_x
     return kernel
 
 
+STORED_BLOCK_BYTES = 256e6    # largest block of the influence matrix kept between Newton steps
+
+
 class HalfSpaceCompliance:
     """Compliance [mm/N] between the dofs (x, y, z per cell) of an n_x x n_y grid of surface cells of spacing h.
 
     Cell centres: x = (i - (n_x - 1)/2) h; y likewise, or y = (j + 1/2) h for the half y > 0 of a body
     mirror-symmetric about y = 0 (``mirror_y``: the other half carries the mirrored tractions, t_y odd, t_x and the
-    pressure even). Same interface as ``contact.compliance.SurfaceCompliance`` (no dof is constrained).
+    pressure even). ``coupled=False``: without the normal-tangential coupling (Goodman). Same interface as
+    ``contact.compliance.SurfaceCompliance`` (no dof is constrained).
     """
 
     components = (0, 1, 2)
 
     def __init__(self, shear_modulus: float, poissons_ratio: float, spacing: float, n_x: int, n_y: int,
-                 mirror_y: bool = False):
+                 mirror_y: bool = False, coupled: bool = True):
         if not (n_x >= 2 and n_y >= 2):
             raise ValueError(f"n_x={n_x!r}, n_y={n_y!r}: a grid needs at least 2 x 2 cells")
         self.spacing, self.n_x, self.n_y, self.mirror_y = float(spacing), int(n_x), int(n_y), bool(mirror_y)
@@ -100,8 +106,9 @@ class HalfSpaceCompliance:
         self.size = 3 * self.positions.shape[0]
         self.constrained = np.zeros(self.size, bool)
         self.reach_y = 2 * n_y if mirror_y else n_y                        # offsets to mirrored cells reach 2 n_y - 1
-        self.kernel = _kernel(shear_modulus, poissons_ratio, spacing, n_x - 1, self.reach_y - 1)
+        self.kernel = _kernel(shear_modulus, poissons_ratio, spacing, n_x - 1, self.reach_y - 1, coupled)
         self.solves = 0
+        self._stored_dofs, self._stored = None, None                        # block over the dofs asked for so far
 
     def unknown_index(self, local_points: np.ndarray) -> np.ndarray:
         """Flat indices (3 len(points),) of the dofs of the given cells."""
@@ -132,8 +139,21 @@ class HalfSpaceCompliance:
         return matrix
 
     def gather(self, row_index: np.ndarray, columns: np.ndarray, out: np.ndarray) -> np.ndarray:
-        """C[rows, columns] written into ``out`` (the Newton step's interface with SurfaceCompliance)."""
-        out[...] = self.block(row_index, columns)
+        """C[rows, columns] written into ``out`` (the Newton step's interface with SurfaceCompliance). The block over
+        every dof asked for so far is kept and grown to the union when a request leaves it: the Newton steps of a
+        path gather nearly the same active set again and again, and slicing a stored block costs a fraction of
+        indexing the kernel table."""
+        rows = np.arange(self.size)[row_index]
+        columns = np.asarray(columns)
+        wanted = np.union1d(rows, columns)
+        if self._stored_dofs is None or np.setdiff1d(wanted, self._stored_dofs, assume_unique=True).size:
+            known = wanted if self._stored_dofs is None else np.union1d(self._stored_dofs, wanted)
+            if known.size**2 * 8 > STORED_BLOCK_BYTES:
+                out[...] = self.block(rows, columns)
+                return out
+            self._stored_dofs, self._stored = known, self.block(known, known)
+        position = np.searchsorted(self._stored_dofs, rows), np.searchsorted(self._stored_dofs, columns)
+        out[...] = self._stored[np.ix_(*position)]
         return out
 
     def traction_grid(self, columns: np.ndarray, forces: np.ndarray) -> np.ndarray:
@@ -208,19 +228,26 @@ def _recover_on_plane(compliance: HalfSpaceCompliance, xy: np.ndarray, state, fr
     return recover_contact(xy, grid_triangles(n_x, n_y), areas, normal, tangential, status, friction_coefficient)
 
 
-def solve_halfspace(scene: Scene, spacing: float, extent: float | None = None) -> list[HalfSpaceIncrement]:
+def solve_halfspace(scene: Scene, spacing: float, extent: float | None = None,
+                    coupled: bool = True) -> list[HalfSpaceIncrement]:
     """Solve the scene's load path with its body, friction and material on an elastic half-space instead of the gel.
 
     spacing : cell size h [mm]; extent : half-width of the gridded square around the body centre [mm] (default
-    1.4 x the Hertz contact radius of the largest press, which must stay outside the contact). Only a sphere body
-    with press and shear loads is supported; the grid is halved when the scene is mirror-symmetric about y = 0.
+    1.4 x the Hertz contact radius of the largest press, which must stay outside the contact); coupled : with the
+    normal-tangential coupling (False: Goodman's approximation, which the closed forms make). The initial gap is
+    the body's surface above the gel's top (``top_surface_height``): a sphere on a block, or a plane on a cap or
+    flat cap (the profile of Fig. 3). Press and shear loads only; the grid is halved when the scene is
+    mirror-symmetric about y = 0.
     """
     from contact._controls import check_feasible, controls as load_controls, scaled, solve_with_substeps
     from contact._newton import OPEN, STICK, ContactState, solve_increment
     from contact.limits import estimated_contact
 
-    if scene.body.shape != "sphere":
-        raise ValueError(f"body.shape={scene.body.shape!r}: the half-space reference takes a sphere body only")
+    curved_gel = scene.gel.shape in (GelShape.CAP, GelShape.FLAT_CAP)
+    if not (scene.body.shape == BodyShape.SPHERE and scene.gel.shape == GelShape.BLOCK
+            or scene.body.shape == BodyShape.PLANE and curved_gel):
+        raise ValueError(f"body.shape={scene.body.shape!r} on gel.shape={scene.gel.shape!r}: the half-space "
+                         f"reference takes a sphere on a block or a plane on a cap or flat_cap")
     if any(load.kind == LoadKind.TWIST for load in scene.loads):
         raise ValueError("the half-space reference takes press and shear loads only (a twist is uncoupled; use Lubkin)")
     if not (spacing > 0 and math.isfinite(spacing)):
@@ -229,13 +256,17 @@ def solve_halfspace(scene: Scene, spacing: float, extent: float | None = None) -
     extent = extent or 1.4 * contact_radius
     if extent <= contact_radius:
         raise ValueError(f"extent={extent!r} mm must exceed the estimated contact radius {contact_radius:.4g} mm")
-    mirror = scene.mirror_symmetric and scene.contact.symmetry == "auto"
+    # a half grid when gel, body and loads are mirror-symmetric about y = 0: the block's rule (Scene.mirror_symmetric)
+    # also holds for a cap or flat cap, which are solids of revolution about the z axis under a plane
+    along_x = all(load.kind == LoadKind.PRESS or load.direction[1] == 0.0 for load in scene.loads)
+    mirror = scene.contact.symmetry == "auto" and (scene.mirror_symmetric or curved_gel and along_x
+                                                   and scene.body.center[1] == 0.0)
     n_x = 2 * int(math.ceil(extent / spacing)) + 1                     # odd: a cell centred below the body
     n_y = int(math.ceil(extent / spacing)) if mirror else n_x
     material = scene.material
-    compliance = HalfSpaceCompliance(material.shear_modulus, material.nu, spacing, n_x, n_y, mirror)
+    compliance = HalfSpaceCompliance(material.shear_modulus, material.nu, spacing, n_x, n_y, mirror, coupled)
     xy = compliance.positions + np.asarray(scene.body.center)
-    gap0 = scene.body.initial_gap(xy)
+    gap0 = scene.body.initial_gap(xy) - scene.gel.geometry.top_surface_height(xy)
     lever = np.column_stack([-(xy[:, 1] - scene.body.center[1]), xy[:, 0] - scene.body.center[0]])
     augmentation = 2.0 * material.effective_modulus * np.sqrt(compliance.areas / np.pi)
     n = xy.shape[0]
@@ -271,7 +302,7 @@ def solve_halfspace(scene: Scene, spacing: float, extent: float | None = None) -
 
 
 @functools.lru_cache(maxsize=16)
-def coupled_reference(scene: Scene, spacing: float) -> tuple[HalfSpaceIncrement, ...]:
-    """``solve_halfspace(scene, spacing)``, remembered per (scene, spacing): studies compare many meshes with one
-    reference path."""
-    return tuple(solve_halfspace(scene, spacing))
+def coupled_reference(scene: Scene, spacing: float, coupled: bool = True) -> tuple[HalfSpaceIncrement, ...]:
+    """``solve_halfspace(scene, spacing, coupled=coupled)``, remembered per (scene, spacing, coupled): studies compare
+    many meshes with one reference path."""
+    return tuple(solve_halfspace(scene, spacing, coupled=coupled))

@@ -4,12 +4,15 @@ the machine can hold.
 Before meshing (``check_scene_limits``, ``check_resources``), from closed-form estimates of the largest press:
 - small strain: indentation d against the gel's thickness H under the contact; past SMALL_STRAIN_WARN a warning,
   past SMALL_STRAIN_REFUSE refused (a linear gel pressed through half its thickness says nothing);
-- a small contact against the curvature: Hertz needs a << R; past CONTACT_WIDTH_WARN a warning, a >= R refused;
+- a small contact against the curvature: a >= R refused; below, the small-strain envelope measured against a
+  finite-strain gel (``contact.envelope``, per quantity: normal force and contact radius up to a contact width a/R,
+  tangential and torsional compliance, stick ratio and the base pressure's centre up to a load ratio) warns;
 - size: the tets, DOF and memory of the mesh the settings ask for (``fem.mesh.size_cells``), refused when the
   estimate exceeds the machine's physical memory, a warning when it exceeds what is free at that instant.
 While solving (``check_increment_limits``), on each converged increment: the computed depth against the thickness
-(same thresholds) and, for a sphere, the distance a contact point has slid against the contact radius (the gap is
-paired at the start: small sliding); past SLIDING_WARN a warning, past SLIDING_REFUSE refused.
+(same thresholds), its contact width and load ratios against the small-strain envelope (a warning per quantity), and,
+for a sphere, the distance a contact point has slid against the contact radius (the gap is paired at the start:
+small sliding); past SLIDING_WARN a warning, past SLIDING_REFUSE refused.
 A refusal is ``PhysicalLimitError`` (a ValueError); a warning is ``PhysicalLimitWarning``.
 """
 
@@ -21,18 +24,20 @@ import warnings
 
 import numpy as np
 
+from contact.envelope import outside_envelope
 from contact.scene import BodyShape, GelShape, LoadKind, Scene, Volumetric
 
 __all__ = ["PhysicalLimitError", "PhysicalLimitWarning", "check_scene_limits", "check_increment_limits",
            "check_resources", "estimate_resources", "machine_memory", "available_memory", "contact_centers",
            "estimated_contact", "fine_depth", "fine_zone",
-           "SMALL_STRAIN_WARN", "SMALL_STRAIN_REFUSE", "CONTACT_WIDTH_WARN", "CONTACT_WIDTH_REFUSE", "SLIDING_WARN",
+           "SMALL_STRAIN_WARN", "SMALL_STRAIN_REFUSE", "CONTACT_WIDTH_REFUSE", "SLIDING_WARN",
            "SLIDING_REFUSE"]
 
 SMALL_STRAIN_WARN = 0.1      # d / H: the linear answer's error grows with the strain, ~10 % here
 SMALL_STRAIN_REFUSE = 0.5    # d / H: half the thickness pressed away; a linear gel says nothing there
-CONTACT_WIDTH_WARN = 0.4     # a / R: the paraboloid of Hertz departs from the sphere by (a/R)^2 / 4 = 4 % at the rim
 CONTACT_WIDTH_REFUSE = 1.0   # a / R: a contact wider than the sphere's radius has no small-strain meaning
+# below a/R = 1 the measured small-strain envelope (contact.envelope) warns per quantity, in place of the former rule
+# of thumb a/R > 0.4
 SLIDING_WARN = 0.1           # slid distance / a: the gap paired at the start is off by about this fraction of d
 SLIDING_REFUSE = 0.5         # slid distance / a: half the contact has moved onto other body points
 # peak memory = interpreter and libraries + factor (fill ~ n^(4/3)) + dense surface compliance. Measured peaks
@@ -162,14 +167,18 @@ def check_scene_limits(scene: Scene) -> list[str]:
     if math.isfinite(radius):
         contact_radius = estimated_contact(scene)[0]
         width = contact_radius / radius
-        level = _level(width, CONTACT_WIDTH_WARN, CONTACT_WIDTH_REFUSE)
-        if level == 2:
+        if not math.isfinite(width) or width >= CONTACT_WIDTH_REFUSE:
             problems.append(f"the contact radius would be about {contact_radius:.3g} mm on a curvature radius of "
                             f"{radius:.3g} mm (a/R = {width:.3g} >= {CONTACT_WIDTH_REFUSE}): not a small contact; "
                             f"lower the press")
-        elif level == 1:
-            notes.append(f"contact radius about {contact_radius:.3g} mm on a curvature radius of {radius:.3g} mm "
-                         f"(a/R = {width:.2f} > {CONTACT_WIDTH_WARN}): Hertz's small-contact assumption is stretched")
+        else:
+            loads = {load.kind.value for load in scene.loads}
+            outside = outside_envelope(width, *_planned_load_ratios(scene, contact_radius), loads)
+            if outside:
+                notes.append(f"contact radius about {contact_radius:.3g} mm on a curvature radius of {radius:.3g} mm "
+                             f"(a/R = {width:.2f}){_load_text(scene, contact_radius)}: outside the small-strain "
+                             f"envelope measured against finite strain (docs/finite_strain.md) for "
+                             + "; ".join(bound.describe() for bound in outside))
     if problems:
         raise PhysicalLimitError("\n".join(problems))
     for note in notes:
@@ -192,6 +201,7 @@ def check_increment_limits(scene: Scene, depth: float, slid: float, contact_radi
         warned.add("strain")
         warnings.warn(f"increment {number}: depth {depth:.3g} mm of the {thickness:g} mm gel (d/H = {strain:.2f} > "
                       f"{SMALL_STRAIN_WARN}): past small strain", PhysicalLimitWarning, stacklevel=3)
+    _check_envelope(scene, number, result, warned)
     if scene.body.shape != BodyShape.SPHERE or contact_radius <= 0.0:
         return                                   # a plane slides along itself, and a sphere twists in place
     sliding = slid / contact_radius
@@ -205,6 +215,50 @@ def check_increment_limits(scene: Scene, depth: float, slid: float, contact_radi
         warnings.warn(f"increment {number}: a contact point has slid {slid:.3g} mm, {sliding:.2f} of the contact "
                       f"radius (> {SLIDING_WARN}): the small-sliding gap is approximate", PhysicalLimitWarning,
                       stacklevel=3)
+
+
+def _planned_load_ratios(scene: Scene, contact_radius: float) -> tuple[float, float]:
+    """Largest Q/(mu P) and T/(mu P a) of the force-controlled shear and twist increments, with the largest press
+    force and the estimated contact radius [mm] (0 where the path controls displacements: checked as it runs)."""
+    force = _max_normal_load(scene)[0]
+    mu = scene.contact.friction_coefficient
+    if not force or mu <= 0.0:
+        return 0.0, 0.0
+    shear = [abs(v) for load in scene.loads if load.kind == LoadKind.SHEAR and load.control == "force"
+             for v in load.values]
+    twist = [abs(v) for load in scene.loads if load.kind == LoadKind.TWIST and load.control == "force"
+             for v in load.values]
+    return max(shear, default=0.0) / (mu * force), max(twist, default=0.0) / (mu * force * contact_radius)
+
+
+def _load_text(scene: Scene, contact_radius: float) -> str:
+    """', Q/(mu P) up to ..., T/(mu P a) up to ...' for the planned force-controlled loads ('' without them)."""
+    shear, twist = _planned_load_ratios(scene, contact_radius)
+    parts = ([f"Q/(mu P) up to {shear:.2f}"] if shear else []) + ([f"T/(mu P a) up to {twist:.2f}"] if twist else [])
+    return f", {', '.join(parts)}" if parts else ""
+
+
+def _check_envelope(scene: Scene, number: int, result, warned: set) -> None:
+    """Warn once per quantity when a converged increment leaves the measured small-strain envelope
+    (``contact.envelope``): its contact width a/R, load ratio Q/(mu P) and torque ratio T/(mu P a)."""
+    radius = _contact_curvature_radius(scene)
+    increment = result.increments[-1] if result is not None and result.increments else None
+    if increment is None or not math.isfinite(radius) or increment.contact_radius <= 0.0:
+        return
+    mu, force = scene.contact.friction_coefficient, increment.normal_force
+    load_ratio = math.hypot(*increment.tangential_force) / (mu * force) if mu > 0 and force > 0 else 0.0
+    torque_ratio = (abs(increment.torque) / (mu * force * increment.contact_radius) if mu > 0 and force > 0
+                    else 0.0)
+    width = increment.contact_radius / radius
+    loads = {load.kind.value for load in scene.loads}
+    fresh = [bound for bound in outside_envelope(width, load_ratio, torque_ratio, loads)
+             if bound.quantity not in warned]
+    if fresh:
+        warned.update(bound.quantity for bound in fresh)
+        warnings.warn(f"increment {number}: a/R = {width:.2f}, Q/(mu P) = {load_ratio:.2f}, T/(mu P a) = "
+                      f"{torque_ratio:.2f}: outside the small-strain envelope measured against finite strain "
+                      f"(docs/finite_strain.md) for " + "; ".join(bound.describe() for bound in fresh),
+                      PhysicalLimitWarning, stacklevel=4)
 
 
 def _meminfo(field: str) -> float | None:

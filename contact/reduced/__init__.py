@@ -6,7 +6,8 @@ gross-slip limit in translation and rotation from the bumps' friction limits, an
 model reads (``_base``: per bump a Gaussian bell carrying P_i and the pressure couple of its overturning moment,
 mirrored at the base layer's edges). Parameters default to the closed-form theory; ``calibration`` fits them to FEM
 paths of the same design, and ``load_calibrated()`` / ``ReducedFingertip.calibrated()`` read the FEM-calibrated file
-shipped in ``contact/reduced/data`` (stored with its design and provenance, ``_store``).
+shipped in ``contact/reduced/data`` (stored with its design and provenance, ``_store``); ``check_bump_forces`` says
+when a bump force leaves the range that file was fitted and checked on, or the small-strain envelope (``_range``).
 """
 
 from ._base import BaseGrid
@@ -15,6 +16,7 @@ from ._bumps import (BumpResponse, bump_law, bump_response, full_stick_stiffness
                      normalized_lubkin_twist)
 from ._design import ArrayFingertipDesign, ReducedParameters
 from ._model import ContactState, ReducedFingertip, SlipMode, load_calibrated
+from ._range import calibrated_bump_forces, check_bump_forces
 from ._samples import PathSamples
 from ._store import PACKAGED_CALIBRATION, StoredCalibration, load_calibration, parse_calibration, save_calibration
 
@@ -22,4 +24,4 @@ __all__ = ["ArrayFingertipDesign", "ReducedParameters", "ReducedFingertip", "Con
            "BumpResponse", "bump_response", "bump_law", "normal_split", "full_stick_stiffness", "mindlin_load_ratio",
            "mindlin_displacement_ratio", "normalized_lubkin_twist", "normalized_lubkin_torque", "lubkin_stick_ratio",
            "PathSamples", "StoredCalibration", "PACKAGED_CALIBRATION", "save_calibration", "load_calibration",
-           "load_calibrated", "parse_calibration"]
+           "load_calibrated", "parse_calibration", "calibrated_bump_forces", "check_bump_forces"]

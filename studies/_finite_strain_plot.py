@@ -1,0 +1,115 @@
+"""The finite-strain study's figure: the three models' curves above, each quantity's error against its tolerance
+below (inside the grey band the small-strain FEM holds)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["plot"]
+
+STYLE = {"fem_linear": dict(color="k", lw=1.8, label="project FEM, linear"),
+         "calculix_linear": dict(color="tab:blue", lw=1.4, ls="--", label="CalculiX, linear"),
+         "calculix_neo_hooke": dict(color="tab:red", lw=1.6, label="CalculiX, Neo-Hookean (NLGEOM)")}
+QUANTITY_STYLE = {"normal_force": ("tab:purple", "o"), "contact_radius": ("tab:green", "s"),
+                  "base_pressure_spread": ("tab:gray", "D"),
+                  "tangential_compliance": ("tab:orange", "o"), "stick_ratio": ("tab:blue", "s"),
+                  "base_cop_shift": ("tab:brown", "^"), "torsional_compliance": ("tab:orange", "o"),
+                  "stick_ratio_twist": ("tab:blue", "s")}
+
+
+def _band(axis, top):
+    axis.axhspan(-1.0, 1.0, color="0.88", zorder=0)
+    axis.axhline(0.0, color="0.5", lw=0.8)
+    axis.set_ylim(-max(2.5, top), max(2.5, top))
+    axis.set_ylabel("(FEM - Neo-Hookean) / tolerance")
+    axis.grid(alpha=0.3)
+
+
+def _errors(axis, rows, problems, title, xlabel):
+    top = 0.0
+    if not any(r["problem"] == problem and np.isfinite(r["judged_error"]) for r in rows
+               for problem, _ in problems):
+        axis.text(0.5, 0.5, "no Neo-Hookean CalculiX result (see the summary's calculix_failed)", ha="center",
+                  transform=axis.transAxes, fontsize=8)
+    for problem, line in problems:
+        for quantity in dict.fromkeys(r["quantity"] for r in rows if r["problem"] == problem):
+            series = sorted((r for r in rows if r["problem"] == problem and r["quantity"] == quantity
+                             and np.isfinite(r["judged_error"])), key=lambda r: r["load"])
+            if not series:
+                continue
+            ratio = np.array([r["judged_error"] / r["tolerance"] for r in series])
+            colour, marker = QUANTITY_STYLE[quantity]
+            axis.plot([r["load"] for r in series], ratio, marker=marker, ls=line, color=colour, ms=4,
+                      label=f"{quantity.replace('_', ' ')} ({series[0]['tolerance']:g}"
+                            f"{'' if series[0]['relative_error'] else ' in c/a'}){' - layer' if line == ':' else ''}")
+            top = max(top, float(np.abs(ratio).max()) * 1.1)
+    _band(axis, top)
+    axis.set_xlabel(xlabel)
+    axis.set_title(title, fontsize=9)
+    if axis.get_legend_handles_labels()[0]:
+        axis.legend(fontsize=6.5, loc="lower left")
+
+
+def plot(rows, fem_sphere, calculix, fem_paths, sphere, bump, found, wall):
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(2, 3, figsize=(14.5, 8.6))
+    # press: force against depth, the layer and the bump
+    axis = axes[0, 0]
+    depth = np.array(fem_sphere)
+    axis.plot(depth[:, 0] / sphere.sphere_radius, depth[:, 1], **STYLE["fem_linear"])
+    fem_press = np.array([(r["depth"], r["normal_force"]) for r in fem_paths["press"]])
+    axis.plot(fem_press[:, 0] / bump.bump_radius, fem_press[:, 1], color="k", lw=1.8, ls=":")
+    for name in ("calculix_linear", "calculix_neo_hooke"):
+        for problem, radius, line in (("sphere", sphere.sphere_radius, "-"), ("press", bump.bump_radius, ":")):
+            if (problem, name) in calculix:
+                curve = np.array([(r.depth, r.normal_force) for r in calculix[problem, name]])
+                style = dict(STYLE[name], ls=line, label=STYLE[name]["label"] if line == "-" else None)
+                axis.plot(curve[:, 0] / radius, curve[:, 1], **style)
+    axis.axhline(2.6, color="0.6", lw=0.8)
+    axis.text(0.01, 2.65, "closed loop's peak bump force 2.6 N", fontsize=7, color="0.4")
+    axis.set(xlabel="depth / radius  d/R", ylabel="normal force P [N]",
+             title="Press: sphere into a 10 mm layer (solid), bump under a plate (dotted, CalculiX axisymmetric)")
+    axis.title.set_fontsize(9)
+    axis.legend(fontsize=7, loc="upper left")
+    # shear: load ratio against shift
+    axis = axes[0, 1]
+    for name in STYLE:
+        if name != "fem_linear" and ("shear", name) not in calculix:
+            continue
+        items = fem_paths["shear"] if name == "fem_linear" else [vars(r) for r in calculix["shear", name]]
+        items = [i for i in items if i["load_kind"] == "shear"]
+        axis.plot([i["shift"] for i in items], [i["tangential_force"] / (bump.friction_coefficient * i["normal_force"])
+                                                for i in items], marker=".", **STYLE[name])
+    axis.set(xlabel="plate shift [mm] (depth held)", ylabel="load ratio Q / (mu P)",
+             title=f"Bump sheared at the depth of {PEAK_TEXT}", ylim=(0, 1.05))
+    axis.title.set_fontsize(9)
+    # twist: torque ratio against angle
+    axis = axes[0, 2]
+    for name in STYLE:
+        if name != "fem_linear" and ("twist", name) not in calculix:
+            continue
+        items = fem_paths["twist"] if name == "fem_linear" else [vars(r) for r in calculix["twist", name]]
+        items = [i for i in items if i["load_kind"] == "twist"]
+        axis.plot([i["angle"] for i in items], [i["torque"] / (bump.friction_coefficient * i["normal_force"])
+                                                for i in items], marker=".", **STYLE[name])
+    axis.set(xlabel="plate twist [rad] (depth held)", ylabel="T / (mu P)  [mm]",
+             title=f"Bump twisted at the depth of {PEAK_TEXT}")
+    axis.title.set_fontsize(9)
+    for axis in axes[0]:
+        axis.grid(alpha=0.3)
+    _errors(axes[1, 0], rows, (("sphere_press", ":"), ("bump_press", "-")), "Press: force and contact radius",
+            "depth / radius  d/R")
+    _errors(axes[1, 1], rows, (("bump_shear", "-"),), "Shear: at equal load ratio", "load ratio Q / (mu P)")
+    _errors(axes[1, 2], rows, (("bump_twist", "-"),), "Twist: at equal torque ratio", "T / (mu P a)  [-]")
+    outside = sorted({r["quantity"].replace("_", " ") for r in rows if r["problem"] != "sphere_press"
+                      and r.get("resolved", True) and np.isfinite(r["judged_error"])
+                      and not r["within_tolerance"]})
+    fig.suptitle("Small strain against finite strain (compressible Neo-Hookean, CalculiX): "
+                 + (f"outside at the paper's loads: {', '.join(outside)}" if outside else
+                    "every quantity within its tolerance at the paper's loads") + f"  ({wall:.0f} s)", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+PEAK_TEXT = "1.5 N (FEM)"
