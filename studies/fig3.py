@@ -133,9 +133,9 @@ def _plot(rows, surface_ratios, max_error, size, spacing, wall):
     axis.grid(alpha=0.3)
     axis.legend(fontsize=7.5, loc="lower left")
     axis.set_title("Flat + curved contact: the flat face makes the stick ratio drop suddenly", fontsize=10)
-    axis.text(0.62, 0.04, f"largest |FEM - coupled half-space| = {max_error:.3f} (Q/(mu P) <= 0.9, a - b >= 2 h)\n"
+    axis.text(0.03, 0.40, f"largest |FEM - coupled half-space| = {max_error:.3f} (Q/(mu P) <= 0.9, a - b >= 2 h)\n"
               f"FEM h = {size} mm, half-space cells {spacing:.3g} mm (a ~ {CONTACT_RADIUS} mm), {wall:.0f} s",
-              transform=axis.transAxes, ha="center", va="bottom", fontsize=8, bbox=dict(fc="white", ec="0.7"))
+              transform=axis.transAxes, ha="left", va="bottom", fontsize=8, bbox=dict(fc="white", ec="0.7"))
     # where the FEM's nodal c/a leaves the closed form, part by part, at the highest judged load and at gross slip
     top = max(r["load_ratio"] for r in rows if r["load_ratio"] <= 0.9)
     loads = [top] + sorted({r["load_ratio"] for r in rows if r["load_ratio"] > 0.9})
