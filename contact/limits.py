@@ -247,9 +247,13 @@ def _check_envelope(scene: Scene, number: int, result, warned: set) -> None:
         return
     mu, force = scene.contact.friction_coefficient, increment.normal_force
     load_ratio = math.hypot(*increment.tangential_force) / (mu * force) if mu > 0 and force > 0 else 0.0
-    torque_ratio = (abs(increment.torque) / (mu * force * increment.contact_radius) if mu > 0 and force > 0
-                    else 0.0)
-    width = increment.contact_radius / radius
+    bumps = len(contact_centers(scene))
+    # an array's contact radius is that of its whole area: each of its k bumps' is about 1/sqrt(k) of it. Its torque
+    # is carried mostly by the bumps' tangential forces about the array's centre, not by each bump's spin, so the
+    # array's T/(mu P a) says nothing of a bump's torsion and is not checked
+    torque_ratio = (abs(increment.torque) / (mu * force * increment.contact_radius)
+                    if mu > 0 and force > 0 and bumps == 1 else 0.0)
+    width = increment.contact_radius / math.sqrt(bumps) / radius
     loads = {load.kind.value for load in scene.loads}
     fresh = [bound for bound in outside_envelope(width, load_ratio, torque_ratio, loads)
              if bound.quantity not in warned]

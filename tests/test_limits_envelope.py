@@ -126,3 +126,22 @@ def test_reduced_model_bump_forces_are_named_against_calibration_and_envelope():
     assert (len(notes) == 2) == bool(past)
     if past:
         assert all(bound.quantity.replace("_", " ") in notes[1] for bound in past)
+
+
+@pytest.mark.parametrize("scale", [0.95, 1.05])
+def test_an_array_is_judged_by_its_bumps_contact_not_by_its_whole_area(scale):
+    # the 3x3 bench fingertip: the increment's contact radius is that of nine bumps' area together; each bump's own
+    # a/R is 1/3 of it, and only a bump past the press bound warns
+    from controller.estimation.bench import bench_scene
+
+    scene = bench_scene(3, "shift", (0.05,), 0.7, 1.5)
+    press = min(_press_bounds(), key=lambda bound: bound.contact_width)
+    bump_radius = scene.gel.curvature_radius
+    radius = 3.0 * scale * press.contact_width * bump_radius               # nine equal contacts
+    increment = SimpleNamespace(contact_radius=radius, normal_force=9.0, tangential_force=(0.0, 0.0), torque=50.0)
+    warned = set()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        check_increment_limits(scene, 0.5, 0.0, radius, 1, SimpleNamespace(increments=[increment]), warned)
+    envelope = [w for w in caught if "small-strain envelope" in str(w.message)]
+    assert bool(envelope) == (scale > 1.0)
