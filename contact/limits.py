@@ -306,8 +306,8 @@ def estimate_resources(scene: Scene, fine_radius: float, half: bool) -> dict:
 
         spec = BlockMeshSpec(width=geometry.width, depth=geometry.depth, thickness=geometry.thickness,
                              size_contact=min(size_contact, scene.mesh.size_far), size_far=scene.mesh.size_far,
-                             fine_radius=fine_radius, fine_depth=fine_depth(scene), fine_center=tuple(scene.body.center),
-                             grading=scene.mesh.grading)
+                             fine_radius=fine_radius, fine_depth=fine_depth(scene),
+                             fine_center=tuple(scene.body.center), grading=scene.mesh.grading)
         cells = size_cells(spec.target_size, [scene.body.center], geometry.width, geometry.depth / (2 if half else 1),
                            geometry.thickness, spec.size_contact)
         tets = BISECTION_TETS_PER_CELL * cells
