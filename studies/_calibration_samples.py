@@ -8,29 +8,12 @@ solving again.
 from __future__ import annotations
 
 import json
-import math
 from dataclasses import fields
 from pathlib import Path
 
 import numpy as np
 
-
-def force_targets(scene) -> np.ndarray:
-    """Per-increment (P [N], F_x [N], F_y [N], T [N mm]) targets of a force-controlled path (last value held)."""
-    from contact.scene import LoadKind
-
-    state = np.zeros(4)
-    rows = []
-    for load in scene.loads:
-        for value in load.values:
-            if load.kind == LoadKind.PRESS:
-                state[0] = value
-            elif load.kind == LoadKind.SHEAR:
-                state[1:3] = value * np.asarray(load.direction) / math.hypot(*load.direction)
-            else:
-                state[3] = value
-            rows.append(state.copy())
-    return np.array(rows)
+from contact.reduced._fit_plan import force_targets   # one definition: the design fit's
 
 
 def save_samples(path: Path, fem: dict, scenes: dict) -> Path:

@@ -68,6 +68,28 @@ class AxisymmetricMesh:
     band_nodes: np.ndarray
 
 
+def _quad8_mesh(gmsh, what: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Mesh the open model's surfaces as 8-node quads (CAX8R); its node tags, coordinates and quad connectivity."""
+    for option, value in (("Mesh.RecombineAll", 1), ("Mesh.Algorithm", 8), ("Mesh.RecombinationAlgorithm", 3),
+                          ("Mesh.SecondOrderIncomplete", 1)):
+        gmsh.option.setNumber(option, value)
+    gmsh.model.mesh.generate(2)
+    gmsh.model.mesh.setOrder(2)
+    tags, xyz = _nodes(gmsh)
+    types, _, connectivity = gmsh.model.mesh.getElements(2)
+    if list(types) != [16]:
+        raise RuntimeError(f"gmsh left element types {list(types)} in the {what}; expected 8-node quads only (16)")
+    return tags, xyz, np.asarray(connectivity[0], dtype=np.int64).reshape(-1, 8)
+
+
+def _numbered_quads(tags: np.ndarray, xyz: np.ndarray, connectivity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes (r, z) [mm] numbered from 1 in gmsh's order and the quads on those numbers, counter-clockwise."""
+    renumber = np.zeros(tags.max() + 1, dtype=np.int64)
+    renumber[tags] = np.arange(1, tags.size + 1)
+    nodes = xyz[:, :2].copy()
+    return nodes, _counter_clockwise(nodes, renumber[connectivity])
+
+
 def axisymmetric_layer(layer_radius: float, thickness: float, sphere_radius: float, size_contact: float,
                        size_far: float, fine_radius: float, band_angle: float, band_thickness: float = 0.2
                        ) -> AxisymmetricMesh:
@@ -80,22 +102,10 @@ def axisymmetric_layer(layer_radius: float, thickness: float, sphere_radius: flo
         gmsh.model.occ.synchronize()
         _size_field(gmsh, f"Min({size_far}, {size_contact} + 0.5 * Max(0, Max(x - {fine_radius}, "
                           f"-y - {fine_radius})))")
-        for option, value in (("Mesh.RecombineAll", 1), ("Mesh.Algorithm", 8), ("Mesh.RecombinationAlgorithm", 3),
-                              ("Mesh.SecondOrderIncomplete", 1)):
-            gmsh.option.setNumber(option, value)
-        gmsh.model.mesh.generate(2)
-        gmsh.model.mesh.setOrder(2)
-        tags, xyz = _nodes(gmsh)
-        types, _, connectivity = gmsh.model.mesh.getElements(2)
-        if list(types) != [16]:
-            raise RuntimeError(f"gmsh left element types {list(types)} in the layer; expected 8-node quads only (16)")
-        quads = np.asarray(connectivity[0], dtype=np.int64).reshape(-1, 8)
+        tags, xyz, connectivity = _quad8_mesh(gmsh, "layer")
     finally:
         gmsh.finalize()
-    renumber = np.zeros(tags.max() + 1, dtype=np.int64)
-    renumber[tags] = np.arange(1, tags.size + 1)
-    nodes, quads = xyz[:, :2].copy(), renumber[quads]
-    quads = _counter_clockwise(nodes, quads)
+    nodes, quads = _numbered_quads(tags, xyz, connectivity)
     top_faces = [(element + 1, face + 1) for element, quad in enumerate(quads) for face, (i, j) in enumerate(CAX8_FACES)
                  if np.all(np.abs(nodes[quad[[i, j]] - 1, 1]) < 1e-9)
                  and nodes[quad[[i, j]] - 1, 0].max() <= sphere_radius * math.sin(band_angle)]
@@ -140,22 +150,10 @@ def axisymmetric_bump(bump_radius: float, base_radius: float, base_thickness: fl
         occ.fuse([(2, base)], cap)
         occ.synchronize()
         _size_field(gmsh, f"Min({size_far}, {size_contact} + 0.5 * Max(0, Sqrt(x^2 + y^2) - {fine_radius}))")
-        for option, value in (("Mesh.RecombineAll", 1), ("Mesh.Algorithm", 8), ("Mesh.RecombinationAlgorithm", 3),
-                              ("Mesh.SecondOrderIncomplete", 1)):
-            gmsh.option.setNumber(option, value)
-        gmsh.model.mesh.generate(2)
-        gmsh.model.mesh.setOrder(2)
-        tags, xyz = _nodes(gmsh)
-        types, _, connectivity = gmsh.model.mesh.getElements(2)
-        if list(types) != [16]:
-            raise RuntimeError(f"gmsh left element types {list(types)} in the bump; expected 8-node quads only (16)")
-        quads = np.asarray(connectivity[0], dtype=np.int64).reshape(-1, 8)
+        tags, xyz, connectivity = _quad8_mesh(gmsh, "bump")
     finally:
         gmsh.finalize()
-    renumber = np.zeros(tags.max() + 1, dtype=np.int64)
-    renumber[tags] = np.arange(1, tags.size + 1)
-    nodes, quads = xyz[:, :2].copy(), renumber[quads]
-    quads = _counter_clockwise(nodes, quads)
+    nodes, quads = _numbered_quads(tags, xyz, connectivity)
     on_arc = lambda n: (np.abs(np.hypot(nodes[n - 1, 0], nodes[n - 1, 1] + radius) - radius) < 1e-6 * radius) & (
         nodes[n - 1, 1] > -radius + 1e-9)
     top_faces = [(element + 1, face + 1) for element, quad in enumerate(quads) for face, (i, j) in enumerate(CAX8_FACES)
