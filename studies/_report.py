@@ -280,14 +280,16 @@ def _rule_robustness(summary, rows):
     trials = summary.get("trials_per_cell", 0)
     met = summary.get("single_factor_target_met")
     worst = summary.get("max_error")
-    if met is None or worst is None:
+    if "single_factor_target_met" not in summary or worst is None:
         return _study_verdict(summary, rows)
-    verdict = REPRODUCED if met and trials >= 30 else PARTLY if met or worst <= 0.2 else NOT_REPRODUCED
+    # not decided (None): no 30-trial cells at every factor's +-15 % - a screen, not a verdict
+    verdict = UNRATED if met is None else REPRODUCED if met else PARTLY if worst <= 0.2 else NOT_REPRODUCED
     return verdict, (f"every single factor up to +-{100 * TARGET_LEVEL:.0f} %: target "
-                     f"{'met' if met else 'not met'} (>= {30 * TARGET_HELD:.0f}/30 held per object); worst cell "
-                     f"{summary.get('worst_cell')} ({summary.get('worst_object')}): failure rate {100 * worst:.0f} %; "
-                     f"{trials} trials per object and cell"
-                     + ("" if trials >= 30 else " - too few to decide the target (--full runs 30)")
+                     f"{ {True: 'met', False: 'not met', None: 'not decided'}[met]} (>= {30 * TARGET_HELD:.0f}/30 "
+                     f"held per object); worst cell {summary.get('worst_cell')} ({summary.get('worst_object')}): "
+                     f"failure rate {100 * worst:.0f} %; {trials} trials per object and cell"
+                     + ("" if met is not None else " - too few to decide the target (--full runs 30 at every "
+                        "factor's +-15 %)")
                      + "; held by friction over every cell: "
                      + ", ".join(f"{band['friction']} {band['held']}/{band['trials']}"
                                  for band in summary.get("friction_bands") or []))

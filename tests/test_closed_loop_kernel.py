@@ -259,10 +259,12 @@ def test_bad_objects_name_the_field(changes, match):
         GraspObject(**{**values, **changes})
 
 
+@pytest.mark.parametrize("touching", [False, True])
 @pytest.mark.parametrize("closing", [1.0, 3.0, 4.6, 4.8, 6.0])
-def test_a_bump_pressed_past_its_own_radius_carries_no_force(closing):
-    # one finger's bump closing on a face: Hertz's k d^1.5 while the tip is within the bump's radius; deeper, the
-    # object met the fingertip edge-on (it slid out) and the bump law says nothing - no force, no depth
+def test_a_bump_entering_deeper_than_its_radius_carries_no_force(closing, touching):
+    # one finger's bump closing on a face: Hertz's k d^1.5 while the tip is within the bump's radius; a tip found
+    # deeper on its first touch met the object edge-on (it slid out) and the bump law says nothing - no force, no
+    # depth; a contact that was touching at the last step keeps its law however deep it went
     radius, stiffness = 4.67, 0.8
     config = np.zeros(K.C_SIZE)
     config[[K.C_NORMAL_STIFFNESS, K.C_MAX_DEPTH]] = stiffness, radius
@@ -270,9 +272,11 @@ def test_a_bump_pressed_past_its_own_radius_carries_no_force(closing):
     geometry = np.zeros((2, K.G_SIZE))
     geometry[:, K.G_FACE] = 1.0, -1.0                      # left and right finger, each facing the object
     bumps, forces, fixed = np.zeros((2, K.B_SIZE)), np.zeros(2), np.zeros((2, 8))
+    bumps[:, K.B_TOUCHING] = float(touching)
     arm, position, rotation, zero = np.zeros(3), np.zeros(3), np.eye(3), np.zeros(3)
     K._fixed_offsets(geometry, arm, position, rotation, fixed)
     K._normal_forces(config, geometry, bumps, arm, closing, 0.0, position, rotation, zero, zero, forces, fixed)
-    expected = stiffness * closing ** 1.5 if closing <= radius else 0.0
+    law = closing <= radius or touching
+    expected = stiffness * closing ** 1.5 if law else 0.0
     assert forces == pytest.approx([expected, expected], rel=1e-12, abs=1e-15)
-    assert bumps[:, K.B_DEPTH] == pytest.approx([closing, closing] if closing <= radius else [0.0, 0.0])
+    assert bumps[:, K.B_DEPTH] == pytest.approx([closing, closing] if law else [0.0, 0.0])

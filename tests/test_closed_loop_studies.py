@@ -113,7 +113,7 @@ def test_robustness_quick_counts_cells_and_friction_bands(tmp_path, monkeypatch)
     # two cells (the nominal build and the known world), one trial per object: the summary and the friction bands must
     # count the rows on disk, and four trials per cell cannot decide the 29/30 target
     from studies import robustness
-    from studies._report import NOT_REPRODUCED, PARTLY, REPRODUCED, _rule_robustness
+    from studies._report import NOT_REPRODUCED, REPRODUCED, UNRATED, _rule_robustness
 
     every = robustness.cells(full=False, quick=True)
     assert {cell["cell"] for cell in every} >= {"nominal", "known_world", "all+-0.20"}
@@ -129,9 +129,36 @@ def test_robustness_quick_counts_cells_and_friction_bands(tmp_path, monkeypatch)
     assert sum(band["held"] for band in bands) == sum(row["outcome"] == "held" for row in rows)
     failure = 1.0 - min(float(cell["success_rate"]) for cell in cells)
     assert summary["max_error"] == pytest.approx(failure)
+    assert summary["single_factor_target_met"] is None                 # no single-factor cell ran: not decided
     verdict, reason = _rule_robustness(summary, rows)
-    assert verdict in (PARTLY, NOT_REPRODUCED) and "too few to decide" in reason
+    assert verdict == UNRATED and "too few to decide" in reason
     met = dict(trials_per_cell=30, single_factor_target_met=True, max_error=0.0, worst_cell="nominal",
                worst_object="eclair", friction_bands=[])
     assert _rule_robustness(met, [])[0] == REPRODUCED
     assert _rule_robustness({**met, "single_factor_target_met": False, "max_error": 0.5}, [])[0] == NOT_REPRODUCED
+
+
+def test_robustness_target_is_decided_only_by_30_trials_at_every_factors_15_percent():
+    # a cell per factor and level: held 30/30 everywhere decides "met" only when every factor has its +-15 % cells
+    # at 30 trials; one of them at 28/30 makes it "not met"; without the +-15 % levels (default, quick) it stays open
+    from controller.plant import PlantFactors
+    from studies import robustness
+
+    def summary(levels, trials=30, held=30, miss=None):
+        rows = []
+        for name in PlantFactors.names():
+            for level in (sorted({abs(v) for v in levels}) if name == "node_gain" else levels):
+                low = miss == (name, level)
+                rows.append(dict(cell=f"{name}{level:+.2f}", factor=name, level=level, object="eclair",
+                                 trials=trials, held=held - 2 * low, success_rate=(held - 2 * low) / trials))
+        return rows
+
+    def decide(rows):
+        return robustness._target_met([r for r in rows if r["factor"] != "none"],
+                                      [r for r in rows if abs(r["level"]) <= robustness.TARGET_LEVEL + 1e-9])
+
+    assert decide(summary(robustness.FULL_LEVELS)) is True
+    assert decide(summary(robustness.FULL_LEVELS, miss=("couple_arm", -0.15))) is False
+    assert decide(summary(robustness.LEVELS)) is None                   # no +-15 % cell: a screen
+    assert decide(summary((-0.2, 0.2))) is None                          # quick
+    assert decide(summary(robustness.FULL_LEVELS, trials=4, held=4)) is None

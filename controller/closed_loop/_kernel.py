@@ -131,9 +131,11 @@ def _normal_forces(config, geometry, bumps, arm, closing_mm, closing_rate_mm, po
         offset_y = arm[1] + side * (config[C_FINGER_OFFSET] - closing_mm) + geometry[i, G_OFFSET + 1] - position[1]
         face = geometry[i, G_FACE]
         depth = half_y + face * (fixed[i, 4] + rotation[1, 1] * offset_y + fixed[i, 5])       # R^T offset, y
-        # a tip deeper than the bump's own radius has nothing left to compress: the object is not in front of the
-        # face but met the fingertip edge-on (an object slid out of the grasp); no contact the bump law describes
-        if not (0.0 < depth <= config[C_MAX_DEPTH]
+        # a bump not touching at the last step whose tip is found deeper than the bump's own radius did not press
+        # into the face: the object met the fingertip edge-on (it slid or turned out of the grasp), a contact the
+        # bump law does not describe. A contact that deepened while touching keeps its law (and its force)
+        entering_too_deep = depth > config[C_MAX_DEPTH] and bumps[i, B_TOUCHING] == 0.0
+        if not (depth > 0.0 and not entering_too_deep
                 and abs(fixed[i, 2] + rotation[1, 0] * offset_y + fixed[i, 3]) <= half_x
                 and abs(fixed[i, 6] + rotation[1, 2] * offset_y + fixed[i, 7]) <= half_z):
             bumps[i, B_DEPTH] = 0.0
