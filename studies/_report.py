@@ -383,7 +383,7 @@ CLAIMS: dict[str, Claim] = {
         "trials default, 3 quick), drops and crushes apart, randomised mu, grasp position and sensor noise",
         _rule_table1),
     "robustness": Claim(
-        "issue #26 target (docs/design.md, sec. 12)",
+        "this toolkit's robustness target (docs/design.md, sec. 12)",
         "the grasp survives a plant the estimator does not know: >= 29/30 held per object for every single plant "
         "factor up to +-15 %, friction 0.2-1.2",
         "MuJoCo closed loop, FEM sensor plane and capacitive arrays, estimator fitted on a nominal build's bench: held "
