@@ -213,7 +213,6 @@ def test_damaged_trial_rows_are_skipped_with_one_warning_and_run_again(tmp_path)
     assert run_trial_table(path, jobs, row, processes=1, function=_grip_of) == first and not calls   # rebuilt
 
 
-
 def test_trial_rows_of_another_plan_are_named_before_they_are_replaced(tmp_path):
     pytest.importorskip("mujoco")
     from studies._trials import TrialRowWarning, run_trial_table
@@ -233,6 +232,7 @@ def test_trial_rows_of_another_plan_are_named_before_they_are_replaced(tmp_path)
     with pytest.warns(TrialRowWarning, match=r"trials.csv': 1 of its rows belong to another plan"):
         rows = run_trial_table(path, jobs(0.5, 0.9), row, processes=1, function=_grip_of)   # 0.7 is not asked for
     assert [r["mu"] for r in rows] == [0.5, 0.9] and len(path.read_text().splitlines()) == 3
+
 
 def _grip_of(obj, settings):
     """A stand-in for a trial: the slip-limit grip force at twice the friction (deterministic, fast) [N]."""

@@ -144,6 +144,8 @@ def test_known_world_reads_back_the_bump_loads_along_both_axes_and_under_twist(k
 
 
 mujoco = pytest.importorskip("mujoco")
+
+
 def _settings(record, **changes):
     """The recorded trial's settings for the displacement-target law (the controller the explicit loop ran)."""
     values = dict(record["settings"])
