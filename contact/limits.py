@@ -245,22 +245,34 @@ def _check_envelope(scene: Scene, number: int, result, warned: set) -> None:
     increment = result.increments[-1] if result is not None and result.increments else None
     if increment is None or not math.isfinite(radius) or increment.contact_radius <= 0.0:
         return
-    mu, force = scene.contact.friction_coefficient, increment.normal_force
-    load_ratio = math.hypot(*increment.tangential_force) / (mu * force) if mu > 0 and force > 0 else 0.0
-    bumps = len(contact_centers(scene))
-    # an array's contact radius is that of its whole area: each of its k bumps' is about 1/sqrt(k) of it. Its torque
-    # is carried mostly by the bumps' tangential forces about the array's centre, not by each bump's spin, so the
-    # array's T/(mu P a) says nothing of a bump's torsion and is not checked
-    torque_ratio = (abs(increment.torque) / (mu * force * increment.contact_radius)
-                    if mu > 0 and force > 0 and bumps == 1 else 0.0)
-    width = increment.contact_radius / math.sqrt(bumps) / radius
+    mu = scene.contact.friction_coefficient
+    bumps = getattr(increment, "bumps", None)
+    if bumps is not None:
+        # an array: each touching bump against the envelope - its own contact radius, Q_i / (mu P_i) and its spin
+        # torque over mu P_i a_i (the array's torque is carried mostly by the bumps' tangential forces); the
+        # widest bump is named
+        touching = (bumps.normal_force > 0.0) & (bumps.contact_radius > 0.0)
+        if not touching.any():
+            return
+        force, a = bumps.normal_force[touching], bumps.contact_radius[touching]
+        shear = np.hypot(*np.asarray(bumps.tangential_force)[touching].T)
+        states = [(a_i / radius, q / (mu * p) if mu > 0 else 0.0, abs(t) / (mu * p * a_i) if mu > 0 else 0.0)
+                  for a_i, q, p, t in zip(a, shear, force, np.asarray(bumps.spin_torque)[touching])]
+    else:
+        force = increment.normal_force
+        load_ratio = math.hypot(*increment.tangential_force) / (mu * force) if mu > 0 and force > 0 else 0.0
+        torque_ratio = (abs(increment.torque) / (mu * force * increment.contact_radius) if mu > 0 and force > 0
+                        else 0.0)
+        states = [(increment.contact_radius / radius, load_ratio, torque_ratio)]
     loads = {load.kind.value for load in scene.loads}
-    fresh = [bound for bound in outside_envelope(width, load_ratio, torque_ratio, loads)
-             if bound.quantity not in warned]
+    outside = {bound: state for state in states for bound in outside_envelope(*state, loads)}
+    fresh = [bound for bound in outside if bound.quantity not in warned]
     if fresh:
         warned.update(bound.quantity for bound in fresh)
+        width, load_ratio, torque_ratio = max(states)
+        where = "" if bumps is None else f" (widest of {len(states)} touching bumps)"
         warnings.warn(f"increment {number}: a/R = {width:.2f}, Q/(mu P) = {load_ratio:.2f}, T/(mu P a) = "
-                      f"{torque_ratio:.2f}: outside the small-strain envelope measured against finite strain "
+                      f"{torque_ratio:.2f}{where}: outside the small-strain envelope measured against finite strain "
                       f"(docs/finite_strain.md) for " + "; ".join(bound.describe() for bound in fresh),
                       PhysicalLimitWarning, stacklevel=4)
 

@@ -5,6 +5,7 @@ import math
 import warnings
 from types import SimpleNamespace
 
+import numpy as np
 import pytest
 
 from contact import BodySpec, ContactSpec, GelSpec, Load, LoadKind, Material, MeshSettings, PhysicalLimitWarning, Scene
@@ -128,20 +129,26 @@ def test_reduced_model_bump_forces_are_named_against_calibration_and_envelope():
         assert all(bound.quantity.replace("_", " ") in notes[1] for bound in past)
 
 
+@pytest.mark.parametrize("touching", [9, 3])
 @pytest.mark.parametrize("scale", [0.95, 1.05])
-def test_an_array_is_judged_by_its_bumps_contact_not_by_its_whole_area(scale):
-    # the 3x3 bench fingertip: the increment's contact radius is that of nine bumps' area together; each bump's own
-    # a/R is 1/3 of it, and only a bump past the press bound warns
+def test_an_array_is_judged_by_each_bumps_contact_not_by_its_whole_area(scale, touching):
+    # the 3x3 bench fingertip: the increment's contact radius is that of the touching bumps' area together; each bump
+    # is judged by its own (contact.bumps), so only a bump past the press bound warns, however many bumps touch
     from controller.estimation.bench import bench_scene
 
     scene = bench_scene(3, "shift", (0.05,), 0.7, 1.5)
     press = min(_press_bounds(), key=lambda bound: bound.contact_width)
     bump_radius = scene.gel.curvature_radius
-    radius = 3.0 * scale * press.contact_width * bump_radius               # nine equal contacts
-    increment = SimpleNamespace(contact_radius=radius, normal_force=9.0, tangential_force=(0.0, 0.0), torque=50.0)
-    warned = set()
+    own = np.where(np.arange(9) < touching, scale * press.contact_width * bump_radius, 0.0)
+    force = np.where(own > 0, 1.0, 0.0)
+    bumps = SimpleNamespace(contact_radius=own, normal_force=force, tangential_force=np.zeros((9, 2)),
+                            spin_torque=np.zeros(9))
+    whole = math.sqrt(touching) * own.max()                                 # sqrt(total area / pi)
+    increment = SimpleNamespace(contact_radius=whole, normal_force=force.sum(), tangential_force=(0.0, 0.0),
+                                torque=0.0, bumps=bumps)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        check_increment_limits(scene, 0.5, 0.0, radius, 1, SimpleNamespace(increments=[increment]), warned)
-    envelope = [w for w in caught if "small-strain envelope" in str(w.message)]
+        check_increment_limits(scene, 0.5, 0.0, whole, 1, SimpleNamespace(increments=[increment]), set())
+    envelope = [str(w.message) for w in caught if "small-strain envelope" in str(w.message)]
     assert bool(envelope) == (scale > 1.0)
+    assert all(f"widest of {touching} touching bumps" in message for message in envelope)
