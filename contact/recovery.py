@@ -38,8 +38,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-__all__ = ["RecoveredContact", "recover_contact", "moving_least_squares", "lumped_average", "positive_area",
-           "surface_triangles"]
+__all__ = ["RecoveredContact", "recover_contact", "moving_least_squares", "lumped_average", "tributary_areas",
+           "positive_area", "surface_triangles"]
 
 PATCH_POINTS = 40          # sources per moving least-squares patch (a quadratic has 6 coefficients)
 # mu p - |q| is the difference of two nodal forces of similar size: on HCM-1 at h = a/5 it scatters about a smooth
@@ -142,6 +142,15 @@ def _sub_triangle_points(order: int) -> np.ndarray:
 QUADRATURE = _sub_triangle_points(8)      # 64 points: sqrt(psi) has a kink where a triangle crosses psi = 0
 
 
+def tributary_areas(xy: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """Area [mm^2] each node of a linear triangle mesh carries, a third of each triangle around it: the weights that
+    integrate a P1 field exactly (the lumped mass of a surface)."""
+    corners = xy[triangles]
+    edge1, edge2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
+    area = 0.5 * np.abs(edge1[:, 0] * edge2[:, 1] - edge1[:, 1] * edge2[:, 0])
+    return np.bincount(triangles.ravel(), np.repeat(area / 3.0, 3), minlength=len(xy))
+
+
 def lumped_average(xy: np.ndarray, triangles: np.ndarray, squared: np.ndarray) -> np.ndarray:
     """Nodal averages int f phi_j dA / int phi_j dA of f = sqrt(max(psi, 0)), psi the piecewise-linear interpolant
     of ``squared`` (n,) on ``triangles``: what a nodal force divided by its tributary area reports of f."""
@@ -150,7 +159,7 @@ def lumped_average(xy: np.ndarray, triangles: np.ndarray, squared: np.ndarray) -
     area = 0.5 * np.abs(edge1[:, 0] * edge2[:, 1] - edge1[:, 1] * edge2[:, 0])                  # (t,)
     root = np.sqrt(np.maximum(squared[triangles] @ QUADRATURE.T, 0.0))                          # (t, q)
     moments = area[:, None] * (root @ QUADRATURE) / QUADRATURE.shape[0]                         # (t, 3)
-    weights = np.bincount(triangles.ravel(), np.repeat(area / 3.0, 3), minlength=len(xy))
+    weights = tributary_areas(xy, triangles)
     integrals = np.bincount(triangles.ravel(), moments.ravel(), minlength=len(xy))
     return np.divide(integrals, weights, out=np.zeros(len(xy)), where=weights > 0)
 

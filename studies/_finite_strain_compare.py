@@ -94,20 +94,8 @@ def shear_rows(fem: list, calculix: dict, friction_coefficient: float) -> list[d
                            i["base_cop_x"] - pressed) for i in items[1:]])
         return _monotone(*table.T)
 
-    models = {"fem_linear": curve(fem),
-              **{name: curve([vars(r) for r in records]) for name, records in calculix.items()}}
-    top = min(c[0].max() for name, c in models.items() if name != "fem_linear")
-    rows = []
-    for k, ratio in enumerate(models["fem_linear"][0]):
-        if ratio > top:
-            break
-        at = {name: [float(np.interp(ratio, c[0], column)) for column in c[1:]] for name, c in models.items()}
-        at["fem_linear"] = [c[k] for c in models["fem_linear"][1:]]
-        for j, (quantity, relative) in enumerate((("tangential_compliance", True), ("stick_ratio", False),
-                                                  ("base_cop_shift", True))):
-            rows.append(_row("bump_shear", quantity, "load_ratio", float(ratio),
-                             {name: at[name][j] for name in at}, relative, {}))
-    return rows
+    return _at_fem_ratios("bump_shear", "load_ratio", (("tangential_compliance", True), ("stick_ratio", False),
+                                                       ("base_cop_shift", True)), curve, fem, calculix)
 
 
 def twist_rows(fem: list, calculix: dict, friction_coefficient: float, contact_radius: float) -> list[dict]:
@@ -119,6 +107,13 @@ def twist_rows(fem: list, calculix: dict, friction_coefficient: float, contact_r
                            i["angle"] / i["torque"], i["stick_ratio"]) for i in items[1:]])
         return _monotone(*table.T)
 
+    return _at_fem_ratios("bump_twist", "torque_ratio", (("torsional_compliance", True), ("stick_ratio_twist", False)),
+                          curve, fem, calculix)
+
+
+def _at_fem_ratios(problem: str, axis: str, quantities, curve, fem: list, calculix: dict) -> list[dict]:
+    """One row per quantity at each of the FEM's load ratios up to the highest every CalculiX model reached; each
+    model's curve (``curve`` of its records: the ratio, then one column per quantity) read at that ratio."""
     models = {"fem_linear": curve(fem),
               **{name: curve([vars(r) for r in records]) for name, records in calculix.items()}}
     top = min(c[0].max() for name, c in models.items() if name != "fem_linear")
@@ -128,9 +123,8 @@ def twist_rows(fem: list, calculix: dict, friction_coefficient: float, contact_r
             break
         at = {name: [float(np.interp(ratio, c[0], column)) for column in c[1:]] for name, c in models.items()}
         at["fem_linear"] = [c[k] for c in models["fem_linear"][1:]]
-        for j, (quantity, relative) in enumerate((("torsional_compliance", True), ("stick_ratio_twist", False))):
-            rows.append(_row("bump_twist", quantity, "torque_ratio", float(ratio),
-                             {name: at[name][j] for name in at}, relative, {}))
+        for j, (quantity, relative) in enumerate(quantities):
+            rows.append(_row(problem, quantity, axis, float(ratio), {name: at[name][j] for name in at}, relative, {}))
     return rows
 
 

@@ -10,6 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from contact.recovery import tributary_areas
 from contact.reduced import ArrayFingertipDesign
 from contact.reduced.design_fit import FitPlan, fit_fingertip, unrepresentable
 from controller.design import DesignStudy, FingertipDesign, design_sweep
@@ -50,16 +51,6 @@ def _array(design):
     return array_design(design)
 
 
-def _nodal_areas(positions, triangles) -> np.ndarray:
-    """Tributary area [mm^2] of each node of a linear triangle mesh: the weights that integrate a P1 field exactly."""
-    a = positions[triangles[:, 1]] - positions[triangles[:, 0]]
-    b = positions[triangles[:, 2]] - positions[triangles[:, 0]]
-    area = 0.5 * np.abs(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])
-    weights = np.zeros(len(positions))
-    np.add.at(weights, triangles.ravel(), np.repeat(area / 3.0, 3))
-    return weights
-
-
 def test_a_design_reproduces_its_own_fem_on_held_out_paths(grasp_sweep):
     *_, fitted = grasp_sweep
     assert fitted.cached                                             # the sweep computed it; this read it back
@@ -68,7 +59,7 @@ def test_a_design_reproduces_its_own_fem_on_held_out_paths(grasp_sweep):
     # vertical equilibrium: a unit normal load on a bump puts 1 N on the base; a tangential load only a couple.
     # float32 storage (2^-24) summed over ~1e3 nodes: 1e-5
     response = fitted.response
-    weights = _nodal_areas(response.positions, response.triangles)
+    weights = tributary_areas(response.positions, response.triangles)
     assert np.abs(response.normal_fields @ weights - 1.0).max() < 1e-5
     assert np.abs(response.shear_fields @ weights).max() < 1e-5 * (np.abs(response.shear_fields) @ weights).max()
     # the contact radius law against Hertz: the FEM's c_a within the quantisation above of (3 R / (4 E*))^(1/3)

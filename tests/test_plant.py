@@ -10,20 +10,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from contact.recovery import tributary_areas
 from controller.plant import FACTOR_LIMIT, FingertipPlant, PlantFactors, SensorPlane
 
 # float32 storage of the packaged fields (2^-24 relative) summed over ~1e3 nodes: force balance to 1e-5 of 1 N
 STORED_BALANCE = 1e-5
-
-
-def _nodal_areas(positions, triangles) -> np.ndarray:
-    """Tributary area [mm^2] of each node of a linear triangle mesh: the weights that integrate a P1 field exactly."""
-    a = positions[triangles[:, 1]] - positions[triangles[:, 0]]
-    b = positions[triangles[:, 2]] - positions[triangles[:, 0]]
-    area = 0.5 * np.abs(a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])
-    weights = np.zeros(len(positions))
-    np.add.at(weights, triangles.ravel(), np.repeat(area / 3.0, 3))
-    return weights
 
 
 def test_each_bumps_base_field_sums_to_the_fem_base_pressure_and_carries_its_own_force():
@@ -51,7 +42,7 @@ def test_packaged_fields_balance_force_per_unit_load():
     from contact.reduced.base_response import BaseResponse
 
     response = BaseResponse.load()
-    weights = _nodal_areas(response.positions, response.triangles)
+    weights = tributary_areas(response.positions, response.triangles)
     assert np.abs(response.normal_fields @ weights - 1.0).max() < STORED_BALANCE
     for fields in (response.shear_fields, response.spin_fields):
         assert np.abs(fields @ weights).max() < STORED_BALANCE * (np.abs(fields) @ weights).max()

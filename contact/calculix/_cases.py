@@ -238,12 +238,9 @@ def _contact_state(xy, triangles, pressure, shear, stuck, friction_coefficient):
     """Recovered contact radius and stick ratio (``contact.recovery`` with the points' status) and the nodal stick
     ratio, from nodal pressures, shear stresses and whether each point moved with the plate."""
     from contact._newton import OPEN, SLIP, STICK
-    from contact.recovery import recover_contact
+    from contact.recovery import recover_contact, tributary_areas
 
-    corner = xy[triangles]
-    edge, other = corner[:, 1] - corner[:, 0], corner[:, 2] - corner[:, 0]
-    area = 0.5 * np.abs(edge[:, 0] * other[:, 1] - edge[:, 1] * other[:, 0])
-    areas = np.bincount(triangles.ravel(), np.repeat(area / 3.0, 3), minlength=xy.shape[0])
+    areas = tributary_areas(xy, triangles)
     status = np.where(pressure <= 0.0, OPEN, np.where(stuck, STICK, SLIP))
     recovered = recover_contact(xy, triangles, areas, pressure * areas, shear * areas[:, None], status,
                                 friction_coefficient)

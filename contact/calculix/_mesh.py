@@ -68,26 +68,39 @@ class AxisymmetricMesh:
     band_nodes: np.ndarray
 
 
+def _second_order_elements(gmsh, dim: int, element_type: int, nodes_per: int, what: str
+                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Mesh the open model in ``dim`` dimensions at second order; its node tags, coordinates and the connectivity of
+    its one element type (gmsh's ``element_type`` with ``nodes_per`` nodes), refused if gmsh made any other."""
+    gmsh.model.mesh.generate(dim)
+    gmsh.model.mesh.setOrder(2)
+    tags, xyz = _nodes(gmsh)
+    types, _, connectivity = gmsh.model.mesh.getElements(dim)
+    if list(types) != [element_type]:
+        raise RuntimeError(f"gmsh made element types {list(types)} in the {what}; expected {nodes_per}-node elements "
+                           f"only ({element_type})")
+    return tags, xyz, np.asarray(connectivity[0], dtype=np.int64).reshape(-1, nodes_per)
+
+
 def _quad8_mesh(gmsh, what: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Mesh the open model's surfaces as 8-node quads (CAX8R); its node tags, coordinates and quad connectivity."""
     for option, value in (("Mesh.RecombineAll", 1), ("Mesh.Algorithm", 8), ("Mesh.RecombinationAlgorithm", 3),
                           ("Mesh.SecondOrderIncomplete", 1)):
         gmsh.option.setNumber(option, value)
-    gmsh.model.mesh.generate(2)
-    gmsh.model.mesh.setOrder(2)
-    tags, xyz = _nodes(gmsh)
-    types, _, connectivity = gmsh.model.mesh.getElements(2)
-    if list(types) != [16]:
-        raise RuntimeError(f"gmsh left element types {list(types)} in the {what}; expected 8-node quads only (16)")
-    return tags, xyz, np.asarray(connectivity[0], dtype=np.int64).reshape(-1, 8)
+    return _second_order_elements(gmsh, 2, 16, 8, what)
+
+
+def _renumbered(tags: np.ndarray, connectivity: np.ndarray) -> np.ndarray:
+    """Connectivity on node numbers from 1 in gmsh's node order (CalculiX's numbering)."""
+    renumber = np.zeros(tags.max() + 1, dtype=np.int64)
+    renumber[tags] = np.arange(1, tags.size + 1)
+    return renumber[connectivity]
 
 
 def _numbered_quads(tags: np.ndarray, xyz: np.ndarray, connectivity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Nodes (r, z) [mm] numbered from 1 in gmsh's order and the quads on those numbers, counter-clockwise."""
-    renumber = np.zeros(tags.max() + 1, dtype=np.int64)
-    renumber[tags] = np.arange(1, tags.size + 1)
     nodes = xyz[:, :2].copy()
-    return nodes, _counter_clockwise(nodes, renumber[connectivity])
+    return nodes, _counter_clockwise(nodes, _renumbered(tags, connectivity))
 
 
 def axisymmetric_layer(layer_radius: float, thickness: float, sphere_radius: float, size_contact: float,
@@ -236,19 +249,12 @@ def bump(bump_radius: float, base_width: float, base_thickness: float, size_cont
         _size_field(gmsh, f"Min({size_far}, {size_contact} + 0.5 * Max(0, Sqrt(x^2 + y^2 + z^2) - {fine_radius}))")
         gmsh.option.setNumber("Mesh.Algorithm3D", 1)
         gmsh.option.setNumber("Mesh.OptimizeNetgen", 1)
-        gmsh.model.mesh.generate(3)
-        gmsh.model.mesh.setOrder(2)
-        tags, xyz = _nodes(gmsh)
-        types, _, connectivity = gmsh.model.mesh.getElements(3)
-        if list(types) != [11]:
-            raise RuntimeError(f"gmsh made element types {list(types)}; expected 10-node tetrahedra only (11)")
-        tets = np.asarray(connectivity[0], dtype=np.int64).reshape(-1, 10)[:, GMSH_TO_C3D10]
+        tags, xyz, tets = _second_order_elements(gmsh, 3, 11, 10, "bump")
     finally:
         gmsh.finalize()
-    renumber = np.zeros(tags.max() + 1, dtype=np.int64)
-    renumber[tags] = np.arange(1, tags.size + 1)
-    used = np.unique(renumber[tets])
-    nodes, tets = xyz, renumber[tets]
+    tets = _renumbered(tags, tets[:, GMSH_TO_C3D10])
+    used = np.unique(tets)
+    nodes = xyz
     x = nodes[tets - 1]                                                   # (m, 10, 3)
     volume = np.einsum("ij,ij->i", np.cross(x[:, 1] - x[:, 0], x[:, 2] - x[:, 0]), x[:, 3] - x[:, 0])
     flip = volume < 0
