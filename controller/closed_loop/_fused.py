@@ -58,15 +58,15 @@ def frame_loads(plant, estimator, buffers, noise, out, time, ratio_noise):
     (``sense_frame``, the belief side): per-bump loads into ``buffers`` and each load ratio's noise (2, k) [-];
     returns (u_x, theta)."""
     (normal_levels, normal, shear_levels, shear, spin, pad_area, law, gain, offset, drift, noise_floor) = plant
-    (tare, couple_law, inverse, threshold, couple_force, couple_table, region, node_x, node_y, node_floor, centres,
-     table_force, table_cop, cop_gain, node_noise, couple_noise) = estimator
+    (tare, couple_law, inverse, threshold, couple_force, couple_table, region, node_x, node_y, node_floor, pool,
+     centres, table_force, table_cop, cop_gain, node_noise, couple_noise) = estimator
     states, readings, pads, change, corrected, load_force, load_ratio, force, shift, fit = buffers
     bump_states(out, states)
     plant_readings(states, normal_levels, normal, shear_levels, shear, spin, pad_area, law, gain, offset, drift,
                    noise_floor, time, noise, pads, change, readings)
     u_x, theta, _ = sense_frame(readings.reshape(2, corrected.shape[1]), tare, couple_law, inverse, threshold,
-                                couple_force, couple_table, region, node_x, node_y, node_floor, centres, table_force,
-                                table_cop, cop_gain, corrected, load_force, load_ratio, force, shift, fit)
+                                couple_force, couple_table, region, node_x, node_y, node_floor, pool, centres,
+                                table_force, table_cop, cop_gain, corrected, load_force, load_ratio, force, shift, fit)
     load_ratio_noise(load_force, threshold, couple_law, node_noise, couple_noise, ratio_noise)
     return u_x, theta
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from controller.control.references import GraspPhase, ReferenceGenerator, ReferenceParameters
 from controller.estimation import (BumpReference, EstimatorCalibration, EstimatorSettings, bump_positions,
-                                   calibrate_gain, estimate_slip)
+                                   calibrate_gain, estimate_slip, gate_pool_for)
 from controller.estimation.sensor_model import rest_calibration
 
 from . import _sensing_kernel as S
@@ -35,6 +35,18 @@ __all__ = ["SensorFrame", "SensingChain", "NOISE_GATE", "CONTACT_GATE", "MINIMUM
 NOISE_GATE = 3.0                  # node readings below this many noise sigmas count as zero (CoP regions)
 CONTACT_GATE = 10.0               # a bump below this many node sigmas of force is not in contact
 MINIMUM_CONTACT_THRESHOLD = 0.02  # N: and never below this
+
+
+def pool_nodes(shape: tuple, side: int) -> np.ndarray:
+    """(ny * nx, side**2) flat indices of the side x side nodes around each node of an array of ``shape``
+    (ny, nx), -1 where the square leaves the array: the compiled gate's pools (``EstimatorSettings.gate_pool``)."""
+    ny, nx = shape
+    half = side // 2
+    j, i = np.divmod(np.arange(ny * nx), nx)
+    dj, di = (offset.ravel() for offset in np.mgrid[-half:half + 1, -half:half + 1])
+    rows, cols = j[:, None] + dj, i[:, None] + di
+    inside = (rows >= 0) & (rows < ny) & (cols >= 0) & (cols < nx)
+    return np.ascontiguousarray(np.where(inside, rows * nx + cols, -1), dtype=np.int64)
 
 
 @dataclass(frozen=True, eq=False)
@@ -87,6 +99,8 @@ class SensingChain:
         self._node_x, self._node_y = node[:, 0].copy(), node[:, 1].copy()
         self._centres = self.layout.centre_array
         self._couple_law = belief.couple_law
+        self._gate_pool = gate_pool_for(self.array.pitch)
+        self._pool_nodes = pool_nodes(self.array.shape, self._gate_pool)
         self.tare(None)
 
     # --- rest calibration -------------------------------------------------------------------------------------
@@ -100,7 +114,7 @@ class SensingChain:
             self.offset, self.noise = rest_calibration(rest)
         self.offset = np.ascontiguousarray(self.offset)
         self.settings = EstimatorSettings(contact_threshold=max(MINIMUM_CONTACT_THRESHOLD, CONTACT_GATE * self.noise),
-                                          node_floor=NOISE_GATE * self.noise)
+                                          node_floor=NOISE_GATE * self.noise, gate_pool=self._gate_pool)
         self.reference_table = self._reference_table()
         self.couple_table = self._couple_table()
         self.calibration = self._calibrate()
@@ -128,8 +142,8 @@ class SensingChain:
         couple_force, couple_table = self.couple_table
         return (self.offset, self._couple_law, self._inverse, float(self.settings.contact_threshold), couple_force,
                 couple_table, self._region, self._node_x, self._node_y, float(self.settings.node_floor),
-                self._centres, table_force, table_cop, float(self.calibration.gain), float(self.noise),
-                self._couple_noise)
+                self._pool_nodes, self._centres, table_force, table_cop, float(self.calibration.gain),
+                float(self.noise), self._couple_noise)
 
     def bump_loads(self, readings, finger: int = 0):
         """Per-bump normal force (m, k) [N], load ratio (m, k, 2) [-] and loaded (m, k) of one fingertip's readings

@@ -17,15 +17,27 @@ from fem.compiled import njit_cached
 
 
 @njit_cached
-def bump_forces_and_cops(readings, region, node_x, node_y, floor, centres, force, cop):
-    """Per-bump force [N] (k,) and CoP [mm] (k, 2) of one frame (n_nodes,): readings above ``floor`` summed over
-    each bump's nodes (``region[n]`` = bump of node n, -1 for none); a bump with no force gets its centre."""
+def bump_forces_and_cops(readings, region, node_x, node_y, floor, pool, centres, force, cop):
+    """Per-bump force [N] (k,) and CoP [mm] (k, 2) of one frame (n_nodes,): readings of open gates summed over each
+    bump's nodes (``region[n]`` = bump of node n, -1 for none); a bump with no force gets its centre. A node's gate
+    is open when the sum over its pool (``pool[n]``: the m x m nodes around it, -1 off the array) exceeds
+    ``floor`` x m (``controller.estimation.gated_weights``)."""
     force[:] = 0.0
     cop[:] = 0.0
+    side = math.sqrt(pool.shape[1])
     for node in range(readings.size):
         bump = region[node]
+        if bump < 0:
+            continue
         value = readings[node]
-        if bump < 0 or not value > floor:
+        if side == 1.0:
+            pooled = value
+        else:
+            pooled = 0.0
+            for member in pool[node]:
+                if member >= 0:
+                    pooled += readings[member]
+        if not pooled > floor * side:
             continue
         force[bump] += value
         cop[bump, 0] += value * node_x[node]
@@ -90,7 +102,7 @@ def reference_at(force, table_force, table_cop, reference):
 
 
 @njit_cached
-def estimate_frame(readings, region, node_x, node_y, node_floor, threshold, centres, table_force, table_cop,
+def estimate_frame(readings, region, node_x, node_y, node_floor, pool, threshold, centres, table_force, table_cop,
                    cop_gain_to_shear, force, shift, fit):
     """The paper's estimator on one frame of both fingertips' readings (2, n_nodes) [N]: per-bump force (2, k)
     [N] and CoP shift (2, k, 2) [mm] against the unsheared reference at the bump's force (0 where the force is at
@@ -102,7 +114,7 @@ def estimate_frame(readings, region, node_x, node_y, node_floor, threshold, cent
     current = np.empty((count, 2))
     used = np.empty(count, dtype=np.bool_)
     for f in range(2):
-        bump_forces_and_cops(readings[f], region, node_x, node_y, node_floor, centres, force[f], cop)
+        bump_forces_and_cops(readings[f], region, node_x, node_y, node_floor, pool, centres, force[f], cop)
         reference_at(force[f], table_force, table_cop, reference)
         for i in range(count):
             used[i] = force[f, i] > threshold
@@ -170,14 +182,14 @@ def read_loads(readings, offset, couple_law, inverse, threshold, couple_force, c
 
 @njit_cached
 def sense_frame(readings, offset, couple_law, inverse, threshold, couple_force, couple_table, region, node_x, node_y,
-                node_floor, centres, table_force, table_cop, cop_gain_to_shear, corrected, load_force, load_ratio,
-                force, shift, fit):
+                node_floor, pool, centres, table_force, table_cop, cop_gain_to_shear, corrected, load_force,
+                load_ratio, force, shift, fit):
     """One sensor frame of both fingertips' readings (2, n) [N]: ``read_loads`` then ``estimate_frame`` on the tared
     readings; returns the paper's inputs (u_x [mm], theta [rad], bumps in contact on the fingertip that sees more),
     the larger of the two fingertips."""
     read_loads(readings, offset, couple_law, inverse, threshold, couple_force, couple_table, corrected, load_force,
                load_ratio)
-    estimate_frame(corrected, region, node_x, node_y, node_floor, threshold, centres, table_force, table_cop,
+    estimate_frame(corrected, region, node_x, node_y, node_floor, pool, threshold, centres, table_force, table_cop,
                    cop_gain_to_shear, force, shift, fit)
     translation = rotation = 0.0
     contacts = 0

@@ -26,6 +26,9 @@ __all__ = [
     "BumpLayout",
     "BumpReference",
     "EstimatorSettings",
+    "GATE_POOL_WIDTH",
+    "gate_pool_for",
+    "gated_weights",
     "SlipEstimate",
     "bump_positions",
     "estimate_slip",
@@ -94,14 +97,46 @@ class EstimatorSettings:
     ----------
     contact_threshold : float -- a bump is in contact when its summed reading exceeds this [N], >= 0.
     node_floor : float -- node readings at or below this count as zero in forces and CoP [N] (noise gate), >= 0.
+    gate_pool : int -- odd side, in nodes, of the square around each node whose readings decide its gate: a node
+        counts when the pool's sum exceeds ``node_floor`` x ``gate_pool`` (the same sigmas of the pool's noise);
+        1: the node alone (``gate_pool_for`` sizes it for an array).
     """
 
     contact_threshold: float = 0.01
     node_floor: float = 0.0
+    gate_pool: int = 1
 
     def __post_init__(self):
         check_range("contact_threshold", self.contact_threshold, 0.0, math.inf, "N")
         check_range("node_floor", self.node_floor, 0.0, math.inf, "N")
+        if isinstance(self.gate_pool, bool) or not isinstance(self.gate_pool, (int, np.integer)) \
+                or self.gate_pool < 1 or self.gate_pool % 2 == 0:
+            raise ValueError(f"gate_pool={self.gate_pool!r} must be an odd positive number of nodes")
+
+
+# side [mm] of the pool that decides a node's noise gate: the paper's 3 mm node. A finer array's node reads a
+# fraction of a 3 mm node's force over the same converter noise (a 1 mm node a ninth: a light bump's rim at 1-3
+# sigmas), and gated node by node it loses the rim - a third of a 0.5 N bump's force at 1 mm, its CoP then following
+# the peak; pooled to ~3 mm the gate sees 3 sigmas of the pool, and each node still counts at its own place.
+GATE_POOL_WIDTH = 3.0
+
+
+def gate_pool_for(pitch: float) -> int:
+    """The odd number of nodes nearest GATE_POOL_WIDTH / pitch, at least 1 (1 for the paper's 3 mm array)."""
+    check_range("pitch", pitch, 0.0, math.inf, "mm", low_open=True)
+    return 2 * int(math.floor(GATE_POOL_WIDTH / pitch / 2.0)) + 1
+
+
+def gated_weights(readings: np.ndarray, settings: EstimatorSettings) -> np.ndarray:
+    """Readings (..., ny, nx) [N] where the node's gate is open (``EstimatorSettings.gate_pool``), else 0."""
+    pool = settings.gate_pool
+    if pool == 1:
+        return np.where(readings > settings.node_floor, readings, 0.0)
+    from scipy.ndimage import uniform_filter
+
+    size = (1,) * (readings.ndim - 2) + (pool, pool)
+    pooled = uniform_filter(readings, size=size, mode="constant", cval=0.0) * (pool * pool)   # sum over the pool
+    return np.where(pooled > settings.node_floor * pool, readings, 0.0)
 
 
 def _check_readings(readings, array: SensorArray) -> np.ndarray:
@@ -127,7 +162,8 @@ def _parabolic_offset(before: np.ndarray, centre: np.ndarray, after: np.ndarray)
 def bump_positions(readings, array: SensorArray, layout: BumpLayout, settings: EstimatorSettings = EstimatorSettings()):
     """Per-bump force, centre of pressure and maximum-pressure point of finite readings.
 
-    force_i = sum_{n in region i} w_n,  CoP_i = sum w_n x_n / force_i,  w_n = reading_n if > node_floor, else 0.
+    force_i = sum_{n in region i} w_n,  CoP_i = sum w_n x_n / force_i,  w_n = reading_n where the node's gate is
+    open (its reading, or its pool's sum, above the floor: ``EstimatorSettings``), else 0.
     The peak is the largest reading of the region, refined by a 3-point parabola along x through its row and
     along y through its column (exact for a quadratic peak; neighbours may lie in the next bump's region; no
     refinement across the array edge). Where a bump's force is 0 both positions are its layout centre.
@@ -144,7 +180,7 @@ def bump_positions(readings, array: SensorArray, layout: BumpLayout, settings: E
     if not np.all(np.isfinite(readings)):
         raise ValueError("readings must be finite here; estimate_slip flags non-finite frames instead")
     regions = layout.regions(array)                                                         # (k, ny, nx)
-    weights = np.where(readings > settings.node_floor, readings, 0.0)                       # (t, ny, nx)
+    weights = gated_weights(readings, settings)                                             # (t, ny, nx)
     force = np.einsum("tyx,kyx->tk", weights, regions)                                      # (t, k)
     moment = np.einsum("tyx,kyx,yxd->tkd", weights, regions, array.node_positions)          # (t, k, 2) [N mm]
     defined = force > 0.0
