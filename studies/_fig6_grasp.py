@@ -206,13 +206,16 @@ def plot_grasp(rows: list[dict], arrays, pitches, wall: float):
     axes[2].set_ylabel("shear-displacement estimation error [%]")
     for axis in axes:
         axis.set_xticks(positions, [f"{n} x {n}" for n in arrays])
+        axis.set_xlim(-0.6, len(arrays) - 0.4)            # a refused array's note stays inside the panel
         axis.set_xlabel("hemisphere array")
         axis.grid(axis="y", alpha=0.3)
         axis.legend(fontsize=7)
     trials = sorted({r["trials"] for r in rows if r["trials"]})
+    # a resumed run computes nothing: say what the recorded closed-loop stages took as well as this run
+    stages = sum(r[name] or 0.0 for r in rows for name in ("calibration_wall", "bench_wall", "trials_wall"))
     fig.suptitle(f"Fig. 6 by grasp outcome: Table I objects, held-out draws, {'/'.join(map(str, trials)) or '-'} "
                  f"trials per array and pitch; plant from each design's FEM, estimator fitted on its bench "
-                 f"({wall:.0f} s)", fontsize=9)
+                 f"(closed-loop stages {stages:.0f} s as recorded; this run {wall:.0f} s)", fontsize=9)
     listing = [f"[{mark}] {', '.join(cases)}: {reason}" for mark, (reason, cases) in enumerate(notes.items(), 1)]
     text = "\n".join(textwrap.fill(line, 200) for line in listing)
     fig.text(0.01, 0.01, text, fontsize=7, va="bottom", color="#b2182b")
