@@ -25,7 +25,8 @@ APPROACH, GRASP, LIFT, HOLD, PLACE, RELEASE = (PHASE_CODES[phase] for phase in G
 # --- scalar state slots ---------------------------------------------------------------------------------------
 (X_COMMAND, X_MINIMUM, X_FRICTION, X_PROBING, X_SLIP_SEEN, X_NEED, X_TIME, X_STARTED, X_CONTACTS, X_WATCHING,
  X_PROBE_BEGUN, X_CARRY_TIME, X_RELEASING, X_RELEASE_NEED, X_RELEASE_FORCE, X_FRAMES, X_HISTORY, X_PHASE, X_GRIP,
- X_CARRY_SLIP, X_SENSED, X_COMMAND_MEAN, X_SENSED_MEAN, X_USE_SLOW, X_SENSED_SLOW, X_PROBED, X_SIZE) = range(27)
+ X_CARRY_SLIP, X_SENSED, X_COMMAND_MEAN, X_SENSED_MEAN, X_USE_SLOW, X_SENSED_SLOW, X_PROBED, X_LIFT_TEST,
+ X_LIFT_FRAMES, X_LIFT_USE, X_LIFT_GRIP, X_LIFT_HOLD, X_SIZE) = range(32)
 # --- parameter slots --------------------------------------------------------------------------------------------
 (P_PERIOD, P_FAST_GAIN, P_SLOW_GAIN, P_APPROACH_FORCE, P_RAMP_RATE, P_MAXIMUM_FORCE, P_LOOP_RATE,
  P_RELEASE_LOOP_RATE, P_SAFETY, P_LIFT_SAFETY, P_PRIOR_FRICTION, P_MAXIMUM_FRICTION, P_PROBE_RATE, P_PROBE_DELAY,
@@ -35,6 +36,11 @@ APPROACH, GRASP, LIFT, HOLD, PLACE, RELEASE = (PHASE_CODES[phase] for phase in G
 # --- rows of the per-bump signals (5, 2, k) and of the ratio signals (4, 2, k, 2) -------------------------------
 FAST, FAST_PREVIOUS, SLOW, SLOW_PREVIOUS, RATIO_NOISE = range(5)
 MINIMUM_FRICTION = 0.05          # a slip measured at a lower ratio carried no load: it is not counted
+# the lift's test (``_lift_test``): a step up of the grip by this fraction, held for a watch window. Half: a held
+# load's nu then falls by log(1.5) = 0.41, and the verdict halfway (0.2) clears the noise margin at the contact
+# minimum (0.1-0.15 of nu with the shipped sensor)
+LIFT_STEP = 0.5
+LIFT_UNTRIED, LIFT_STEPPED, LIFT_DONE = 0.0, 1.0, 2.0
 # what ``observe_frame`` saw: nothing, a single bump sliding, the grasp's carried load falling with its grip (gross
 # slip), the array's utilisation staying put while its grip fell (the array sliding as a whole)
 NO_SLIP, BUMP_SLIP, GROSS_SLIP, ARRAY_SLIP = range(4)
@@ -75,6 +81,39 @@ def _target(parameters, scalars):
 @njit_cached(inline="always")
 def _ema(value, target, gain):
     return target if value == 0.0 else value + gain * (target - value)
+
+
+@njit_cached
+def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noise, full, frames):
+    """The lift's test of a load that does not come on (once per lift): the grip's utilisation nu has sat below the
+    lift's level for a window, neither rising nor falling (a load that eases after the lift's acceleration lowers
+    nu while the grip lags: that is not it) - the grip is above what the load asks, which a held load
+    corrects within the loop's time (nu ~ 1 / P rises to the level as the grip sinks), but bumps that slide carry
+    mu of any grip and keep nu = mu. The grip steps up by LIFT_STEP and is held there for a window: held, the load
+    stays and nu falls like 1 / P; sliding, the load follows the grip and nu stays. Halfway between (with the noise
+    margin) is the verdict; sliding marks the array's slip (signature[1, count]), and mu_hat becomes nu."""
+    level = parameters[P_LIFT_SAFETY] * scalars[X_FRICTION]
+    if scalars[X_LIFT_TEST] == LIFT_UNTRIED:
+        # only where the lift's own stall test is blind: its noise margin more than twice the rise it allows
+        if (full and MINIMUM_FRICTION < use_then[0] and MINIMUM_FRICTION < use_now[0]
+                and use_noise > 2.0 * parameters[P_STALL_RISE] * use_now[0]
+                and max(use_now[0], use_then[0]) + use_noise < level and abs(use_now[0] - use_then[0]) <= use_noise):
+            scalars[X_LIFT_TEST], scalars[X_LIFT_FRAMES] = LIFT_STEPPED, 0.0
+            scalars[X_LIFT_USE], scalars[X_LIFT_GRIP] = use_now[0], use_now[1]
+            scalars[X_LIFT_HOLD] = _first_min(scalars[X_COMMAND] * (1.0 + LIFT_STEP), parameters[P_MAXIMUM_FORCE])
+            scalars[X_COMMAND] = scalars[X_LIFT_HOLD]
+    elif scalars[X_LIFT_TEST] == LIFT_STEPPED:
+        scalars[X_LIFT_FRAMES] += 1.0
+        if scalars[X_LIFT_FRAMES] >= frames:            # judged each frame until held, or the slip is confirmed
+            rise = math.log(use_now[1] / scalars[X_LIFT_GRIP]) if use_now[1] > 0.0 else 0.0
+            follows = False                         # the carried load followed the grip: nu stayed where it was
+            if rise >= math.log(1.0 + 2.0 * parameters[P_FORCE_DROP]) and use_now[0] > 0.0:
+                change = math.log(use_now[0] / scalars[X_LIFT_USE])
+                follows = change - use_noise / use_now[0] > -0.5 * rise
+            if follows:
+                signature[1, count] = True
+            else:
+                scalars[X_LIFT_TEST] = LIFT_DONE
 
 
 @njit_cached
@@ -155,6 +194,7 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
     # minimum force) whose load stopped growing below what it carries
     lifting = scalars[X_PHASE] == LIFT and scalars[X_COMMAND] > 1.05 * scalars[X_MINIMUM] and not seen
     use_mode = 1 if probed else (2 if lifting and parameters[P_STALL_FRACTION] > 0.0 else 0)
+    use_noise = math.sqrt(2.0 * parameters[P_SLOW_GAIN]) * wrench_noise / max(sensed, 1e-9)
     signature, total_ratio, bearing, magnitudes = slip_signature(
         signals[SLOW], ratios[SLOW], signals[FAST], ratios[FAST], contact, centres, history_force[oldest],
         history_ratios[oldest], judged, watch_total, reference, carried, second_frame, hold_ratio,
@@ -163,9 +203,11 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
         parameters[P_FORCE_SHARE], noise, wrench_noise, parameters[P_REACH], use_now, use_then,
         # the utilisation's noise: the per-bump noise pooled, through the slow filter (variance times its gain b)
         # and the window's difference (twice that): sqrt(2 b) of the raw margin
-        math.sqrt(2.0 * parameters[P_SLOW_GAIN]) * wrench_noise / max(sensed, 1e-9), use_mode,
+        use_noise, use_mode,
         parameters[P_LIFT_SAFETY] * scalars[X_FRICTION],
         parameters[P_STALL_RISE], parameters[P_STALL_FRACTION])
+    if scalars[X_PHASE] == LIFT and not seen:
+        _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noise, written >= frames, frames)
     history_force[oldest] = signals[SLOW]
     history_ratios[oldest] = magnitudes
     history_use[oldest, :2] = use_now
@@ -229,6 +271,7 @@ def control_step(parameters, scalars, plateau, streak, phase):
         scalars[X_PHASE] = phase
         if not carrying:
             scalars[X_CARRY_TIME] = scalars[X_PROBING] = scalars[X_PROBE_BEGUN] = 0.0
+            scalars[X_LIFT_TEST] = LIFT_UNTRIED
             # the lift is watched from its start (a friction below the prior slides it), the total from the probe
             scalars[X_WATCHING] = 1.0 if phase == LIFT else 0.0
             _start_watch(scalars, plateau, streak, False)
@@ -251,6 +294,8 @@ def control_step(parameters, scalars, plateau, streak, phase):
         if phase == LIFT or phase == HOLD:
             _carry_step(parameters, scalars, plateau, streak, period)
         target = _first_max(_target(parameters, scalars), scalars[X_MINIMUM])
+        if phase == LIFT and scalars[X_LIFT_TEST] == LIFT_STEPPED:       # the lift's test holds its step
+            target = _first_max(target, scalars[X_LIFT_HOLD])
         target = _first_min(target, parameters[P_MAXIMUM_FORCE])
         rate = parameters[P_LOOP_RATE] if target > scalars[X_COMMAND] else parameters[P_RELEASE_LOOP_RATE]
         scalars[X_COMMAND] += rate * period * (target - scalars[X_COMMAND])

@@ -39,6 +39,15 @@ later (the load grew, or mu_hat was too high) lowers mu_hat and steps the grip u
 only while the grip is probed down: at a held grip a bump's force changes only as the normal forces redistribute,
 not as the controller asks.
 
+Lift test (once per lift, before any slip was seen). Below the lift's level (mu_hat x ``lift_safety_fraction``)
+sliding bumps carry only mu of the grip, so the demand never asks for more and the grip stays where it is - at the
+contact minimum, where the utilisation's noise is several times the lift's stall threshold and its stall test cannot
+see. Where that test is blind (its noise margin more than twice ``STALL_RISE``), a utilisation that has sat below
+the level for a window, neither rising nor falling, is tested: the grip steps up by half (``_slip_law.LIFT_STEP``)
+and is held there for a window. Held, the load stays and nu falls like 1 / P; sliding, the load follows the grip and
+nu stays: halfway between, with the noise margin, is the verdict. Sliding marks the array's slip (mu_hat = nu, the
+grip steps up as after any slip); held lets the grip back to its demand. The step is the safe direction.
+
 Placing and releasing: in PLACE the demand falls as the table takes the load; in RELEASE the force falls at
 ``release_rate`` of the hold force per second in proportion to how far the load has left the fingertips (at once if
 none was carried), as the displacement-target law does (``GraspForceController``).
