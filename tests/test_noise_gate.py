@@ -6,7 +6,7 @@ import pytest
 
 from controller.closed_loop._sensing import pool_nodes
 from controller.closed_loop._sensing_kernel import bump_forces_and_cops
-from controller.estimation import BumpLayout, EstimatorSettings, bump_positions, gate_pool_for
+from controller.estimation import BumpLayout, EstimatorSettings, bump_positions, gate_pool_for, gated_weights
 from controller.sensing import SensorArray
 
 NOISE = 0.001            # N per node and frame: the closed loop's nominal array
@@ -42,24 +42,42 @@ def _gaussian_bumps(array, layout, force, width, shift=0.0):
 
 
 def test_pooled_gate_keeps_what_a_gaussian_bump_has_above_the_pools_floor():
-    """A 2D Gaussian keeps 1 - g / p_peak of its force inside the level where it reads g: the node gate reads
-    g = 3 sigma, the pool of 3 x 3 nodes 3 sigma / 3 (its mean's noise). 0.5 N per bump, width 2.5 mm, a 1 mm array:
-    0.76 and 0.92. Tolerance: the ~2 pi r_g / pitch nodes along the level r_g carry about g each and fall in or out
-    with where the grid lies, pi r_g g / (pitch F) (0.07 and 0.035)."""
+    """A 2D Gaussian of width s keeps 1 - g / p_peak of its force inside the level where it reads g. The node gate
+    reads the bump itself at g = 3 sigma; the pool of 3 x 3 nodes reads its mean, the Gaussian smoothed by the
+    pool's box (width^2 s^2 + (m^2 - 1) pitch^2 / 12), at g = 3 sigma / 3, and keeps 1 - (g / p_peak')^(s'^2 / s^2)
+    of the bump. 0.5 N per bump, width 2.5 mm, a 1 mm array: 0.76 and 0.93. Tolerance: the ~2 pi r_g / pitch nodes
+    along the level r_g carry about g each and fall in or out with where the grid lies, pi r_g g / (pitch F)
+    (0.08 and 0.04)."""
     array = SensorArray(pitch=1.0, node_counts=(40, 40), fill_factor=1.0)
     layout = BumpLayout.grid((3, 3), 40.0 / 3.0)
     force, width = 0.5, 2.5
     readings = _gaussian_bumps(array, layout, force, width)
-    peak = force / (2 * np.pi * width ** 2) * array.pitch ** 2
     whole = bump_positions(readings, array, layout, EstimatorSettings())[0][0]
     kept = {}
     for pool in (1, 3):
         floor = GATE / pool
-        level = width * np.sqrt(2 * np.log(peak / floor))                                  # r_g [mm]
+        smoothed = width ** 2 + (pool ** 2 - 1) * array.pitch ** 2 / 12                    # s'^2 [mm^2]
+        peak = force / (2 * np.pi * smoothed) * array.pitch ** 2                             # p_peak' [N per node]
+        level = np.sqrt(2 * smoothed * np.log(peak / floor))                                 # r_g [mm]
         kept[pool] = bump_positions(readings, array, layout, EstimatorSettings(node_floor=GATE, gate_pool=pool))[0][0]
-        np.testing.assert_allclose(kept[pool] / whole, 1 - floor / peak,
+        np.testing.assert_allclose(kept[pool] / whole, 1 - (floor / peak) ** (smoothed / width ** 2),
                                    atol=np.pi * level * floor / (array.pitch * force))
     assert np.all(kept[3] > kept[1])
+
+
+def test_an_edge_pool_sees_the_same_sigmas_of_its_own_noise():
+    """Noise alone: an edge pool holds 6 nodes, an inner one 9; each is compared with 3 sigma of its own sum, so the
+    share of gates that noise opens is the one-sided 3-sigma tail, 0.00135, wherever the node sits (a threshold of
+    3 sigma of a full pool would be 3.7 sigma at the edge: 1.2e-4). Tolerance 3e-4: over 2000 frames the binomial
+    standard error is 7e-5 on the 152 edge nodes and 2e-5 inside."""
+    array = SensorArray(pitch=1.0, node_counts=(40, 40), fill_factor=1.0)
+    noise = np.random.default_rng(5).normal(0.0, NOISE, (2000,) + array.shape)
+    opened = gated_weights(noise, EstimatorSettings(node_floor=GATE, gate_pool=3)) != 0.0
+    share = opened.mean(axis=0)
+    edges = np.concatenate([share[0, 1:-1], share[-1, 1:-1], share[1:-1, 0], share[1:-1, -1]]).mean()
+    inner = share[1:-1, 1:-1].mean()
+    assert edges == pytest.approx(0.00135, abs=0.0003)
+    assert inner == pytest.approx(0.00135, abs=0.0003)
 
 
 def test_a_fine_arrays_cop_gain_does_not_collapse_with_the_node_noise():

@@ -21,7 +21,7 @@ def bump_forces_and_cops(readings, region, node_x, node_y, floor, pool, centres,
     """Per-bump force [N] (k,) and CoP [mm] (k, 2) of one frame (n_nodes,): readings of open gates summed over each
     bump's nodes (``region[n]`` = bump of node n, -1 for none); a bump with no force gets its centre. A node's gate
     is open when the sum over its pool (``pool[n]``: the m x m nodes around it, -1 off the array) exceeds
-    ``floor`` x m (``controller.estimation.gated_weights``)."""
+    ``floor`` x sqrt(the pool's nodes on the array) (``controller.estimation.gated_weights``)."""
     force[:] = 0.0
     cop[:] = 0.0
     side = math.sqrt(pool.shape[1])
@@ -31,13 +31,14 @@ def bump_forces_and_cops(readings, region, node_x, node_y, floor, pool, centres,
             continue
         value = readings[node]
         if side == 1.0:
-            pooled = value
+            pooled, members = value, 1.0
         else:
-            pooled = 0.0
+            pooled = members = 0.0
             for member in pool[node]:
                 if member >= 0:
                     pooled += readings[member]
-        if not pooled > floor * side:
+                    members += 1.0
+        if not pooled > floor * math.sqrt(members):
             continue
         force[bump] += value
         cop[bump, 0] += value * node_x[node]

@@ -26,7 +26,7 @@ APPROACH, GRASP, LIFT, HOLD, PLACE, RELEASE = (PHASE_CODES[phase] for phase in G
 (X_COMMAND, X_MINIMUM, X_FRICTION, X_PROBING, X_SLIP_SEEN, X_NEED, X_TIME, X_STARTED, X_CONTACTS, X_WATCHING,
  X_PROBE_BEGUN, X_CARRY_TIME, X_RELEASING, X_RELEASE_NEED, X_RELEASE_FORCE, X_FRAMES, X_HISTORY, X_PHASE, X_GRIP,
  X_CARRY_SLIP, X_SENSED, X_COMMAND_MEAN, X_SENSED_MEAN, X_USE_SLOW, X_SENSED_SLOW, X_PROBED, X_LIFT_TEST,
- X_LIFT_FRAMES, X_LIFT_USE, X_LIFT_GRIP, X_LIFT_HOLD, X_SIZE) = range(32)
+ X_LIFT_FRAMES, X_LIFT_USE, X_LIFT_GRIP, X_LIFT_HOLD, X_LIFT_HELD, X_SIZE) = range(33)
 # --- parameter slots --------------------------------------------------------------------------------------------
 (P_PERIOD, P_FAST_GAIN, P_SLOW_GAIN, P_APPROACH_FORCE, P_RAMP_RATE, P_MAXIMUM_FORCE, P_LOOP_RATE,
  P_RELEASE_LOOP_RATE, P_SAFETY, P_LIFT_SAFETY, P_PRIOR_FRICTION, P_MAXIMUM_FRICTION, P_PROBE_RATE, P_PROBE_DELAY,
@@ -38,7 +38,7 @@ FAST, FAST_PREVIOUS, SLOW, SLOW_PREVIOUS, RATIO_NOISE = range(5)
 MINIMUM_FRICTION = 0.05          # a slip measured at a lower ratio carried no load: it is not counted
 # the lift's test (``_lift_test``): a step up of the grip by this fraction, held for a watch window. Half: a held
 # load's nu then falls by log(1.5) = 0.41, and the verdict halfway (0.2) clears the noise margin at the contact
-# minimum (0.1-0.15 of nu with the shipped sensor)
+# minimum (0.09-0.12 of nu for the traced bottle at 0.5-0.9 N, docs/design.md sec. 12)
 LIFT_STEP = 0.5
 LIFT_UNTRIED, LIFT_STEPPED, LIFT_DONE = 0.0, 1.0, 2.0
 # what ``observe_frame`` saw: nothing, a single bump sliding, the grasp's carried load falling with its grip (gross
@@ -91,14 +91,17 @@ def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noi
     corrects within the loop's time (nu ~ 1 / P rises to the level as the grip sinks), but bumps that slide carry
     mu of any grip and keep nu = mu. The grip steps up by LIFT_STEP and is held there for a window: held, the load
     stays and nu falls like 1 / P; sliding, the load follows the grip and nu stays. Halfway between (with the noise
-    margin) is the verdict; sliding marks the array's slip (signature[1, count]), and mu_hat becomes nu."""
+    margin) is the verdict, and either must hold for confirm_frames frames in a row: sliding marks the array's slip
+    (signature[1, count]: mu_hat becomes nu), held lets the grip go back to its demand. Not while the probe runs (it
+    lowers the grip on purpose); a test still running when the lift ends is judged on into the hold."""
     level = parameters[P_LIFT_SAFETY] * scalars[X_FRICTION]
     if scalars[X_LIFT_TEST] == LIFT_UNTRIED:
         # only where the lift's own stall test is blind: its noise margin more than twice the rise it allows
-        if (full and MINIMUM_FRICTION < use_then[0] and MINIMUM_FRICTION < use_now[0]
+        if (scalars[X_PHASE] == LIFT and scalars[X_PROBING] == 0.0 and use_now[1] > 0.0
+                and full and MINIMUM_FRICTION < use_then[0] and MINIMUM_FRICTION < use_now[0]
                 and use_noise > 2.0 * parameters[P_STALL_RISE] * use_now[0]
                 and max(use_now[0], use_then[0]) + use_noise < level and abs(use_now[0] - use_then[0]) <= use_noise):
-            scalars[X_LIFT_TEST], scalars[X_LIFT_FRAMES] = LIFT_STEPPED, 0.0
+            scalars[X_LIFT_TEST], scalars[X_LIFT_FRAMES], scalars[X_LIFT_HELD] = LIFT_STEPPED, 0.0, 0.0
             scalars[X_LIFT_USE], scalars[X_LIFT_GRIP] = use_now[0], use_now[1]
             scalars[X_LIFT_HOLD] = _first_min(scalars[X_COMMAND] * (1.0 + LIFT_STEP), parameters[P_MAXIMUM_FORCE])
             scalars[X_COMMAND] = scalars[X_LIFT_HOLD]
@@ -112,8 +115,11 @@ def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noi
                 follows = change - use_noise / use_now[0] > -0.5 * rise
             if follows:
                 signature[1, count] = True
+                scalars[X_LIFT_HELD] = 0.0
             else:
-                scalars[X_LIFT_TEST] = LIFT_DONE
+                scalars[X_LIFT_HELD] += 1.0
+                if scalars[X_LIFT_HELD] >= parameters[P_CONFIRM_FRAMES]:
+                    scalars[X_LIFT_TEST] = LIFT_DONE
 
 
 @njit_cached
@@ -206,7 +212,7 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
         use_noise, use_mode,
         parameters[P_LIFT_SAFETY] * scalars[X_FRICTION],
         parameters[P_STALL_RISE], parameters[P_STALL_FRACTION])
-    if scalars[X_PHASE] == LIFT and not seen:
+    if not seen and (scalars[X_PHASE] == LIFT or scalars[X_LIFT_TEST] == LIFT_STEPPED):
         _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noise, written >= frames, frames)
     history_force[oldest] = signals[SLOW]
     history_ratios[oldest] = magnitudes
@@ -242,6 +248,7 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
         return NO_SLIP
     scalars[X_FRICTION] = _first_min(scalars[X_FRICTION], measured) if seen else measured
     scalars[X_SLIP_SEEN], scalars[X_PROBING] = 1.0, 0.0
+    scalars[X_LIFT_TEST] = LIFT_DONE                  # a slip seen ends the lift's test (and its hold on the grip)
     scalars[X_CARRY_SLIP] = 1.0
     # step up at once, by at least twice the safety margin: a grasp that slid carried less than its load while
     # sliding, so the demand read off its loads is short of what holds it, and what slides has gathered momentum
@@ -294,7 +301,7 @@ def control_step(parameters, scalars, plateau, streak, phase):
         if phase == LIFT or phase == HOLD:
             _carry_step(parameters, scalars, plateau, streak, period)
         target = _first_max(_target(parameters, scalars), scalars[X_MINIMUM])
-        if phase == LIFT and scalars[X_LIFT_TEST] == LIFT_STEPPED:       # the lift's test holds its step
+        if scalars[X_LIFT_TEST] == LIFT_STEPPED:                         # the lift's test holds its step
             target = _first_max(target, scalars[X_LIFT_HOLD])
         target = _first_min(target, parameters[P_MAXIMUM_FORCE])
         rate = parameters[P_LOOP_RATE] if target > scalars[X_COMMAND] else parameters[P_RELEASE_LOOP_RATE]

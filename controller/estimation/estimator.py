@@ -98,8 +98,9 @@ class EstimatorSettings:
     contact_threshold : float -- a bump is in contact when its summed reading exceeds this [N], >= 0.
     node_floor : float -- node readings at or below this count as zero in forces and CoP [N] (noise gate), >= 0.
     gate_pool : int -- odd side, in nodes, of the square around each node whose readings decide its gate: a node
-        counts when the pool's sum exceeds ``node_floor`` x ``gate_pool`` (the same sigmas of the pool's noise);
-        1: the node alone (``gate_pool_for`` sizes it for an array).
+        counts when the sum over the pool's nodes on the array exceeds ``node_floor`` x sqrt(their number) (the
+        same sigmas of the sum's noise); 1: the node alone (``gate_pool_for`` sizes it for an array). A node of an
+        open pool counts with its own reading, negative noise included (zero-mean noise then averages out).
     """
 
     contact_threshold: float = 0.01
@@ -136,7 +137,9 @@ def gated_weights(readings: np.ndarray, settings: EstimatorSettings) -> np.ndarr
 
     size = (1,) * (readings.ndim - 2) + (pool, pool)
     pooled = uniform_filter(readings, size=size, mode="constant", cval=0.0) * (pool * pool)   # sum over the pool
-    return np.where(pooled > settings.node_floor * pool, readings, 0.0)
+    # nodes of each pool on the array (fewer at its edges): the sum's noise is sqrt(members) node sigmas
+    members = uniform_filter(np.ones(readings.shape[-2:]), size=(pool, pool), mode="constant") * (pool * pool)
+    return np.where(pooled > settings.node_floor * np.sqrt(np.rint(members)), readings, 0.0)
 
 
 def _check_readings(readings, array: SensorArray) -> np.ndarray:
