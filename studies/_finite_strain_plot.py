@@ -50,6 +50,17 @@ def _errors(axis, rows, problems, title, xlabel):
         axis.legend(fontsize=6.5, loc="lower left")
 
 
+def _load_ratio_curves(axis, kind: str, abscissa: str, load: str, fem_paths, calculix, friction: float) -> None:
+    """One curve per solver of a ``kind`` path ("shear" or "twist"): ``load`` / (mu P) against ``abscissa``."""
+    for name in STYLE:
+        if name != "fem_linear" and (kind, name) not in calculix:
+            continue
+        items = fem_paths[kind] if name == "fem_linear" else [vars(r) for r in calculix[kind, name]]
+        items = [i for i in items if i["load_kind"] == kind]
+        axis.plot([i[abscissa] for i in items], [i[load] / (friction * i["normal_force"]) for i in items],
+                  marker=".", **STYLE[name])
+
+
 def plot(rows, fem_sphere, calculix, fem_paths, sphere, bump, found, wall):
     import matplotlib.pyplot as plt
 
@@ -74,25 +85,13 @@ def plot(rows, fem_sphere, calculix, fem_paths, sphere, bump, found, wall):
     axis.legend(fontsize=7, loc="upper left")
     # shear: load ratio against shift
     axis = axes[0, 1]
-    for name in STYLE:
-        if name != "fem_linear" and ("shear", name) not in calculix:
-            continue
-        items = fem_paths["shear"] if name == "fem_linear" else [vars(r) for r in calculix["shear", name]]
-        items = [i for i in items if i["load_kind"] == "shear"]
-        axis.plot([i["shift"] for i in items], [i["tangential_force"] / (bump.friction_coefficient * i["normal_force"])
-                                                for i in items], marker=".", **STYLE[name])
+    _load_ratio_curves(axis, "shear", "shift", "tangential_force", fem_paths, calculix, bump.friction_coefficient)
     axis.set(xlabel="plate shift [mm] (depth held)", ylabel="load ratio Q / (mu P)",
              title=f"Bump sheared at the depth of {PEAK_TEXT}", ylim=(0, 1.05))
     axis.title.set_fontsize(9)
     # twist: torque ratio against angle
     axis = axes[0, 2]
-    for name in STYLE:
-        if name != "fem_linear" and ("twist", name) not in calculix:
-            continue
-        items = fem_paths["twist"] if name == "fem_linear" else [vars(r) for r in calculix["twist", name]]
-        items = [i for i in items if i["load_kind"] == "twist"]
-        axis.plot([i["angle"] for i in items], [i["torque"] / (bump.friction_coefficient * i["normal_force"])
-                                                for i in items], marker=".", **STYLE[name])
+    _load_ratio_curves(axis, "twist", "angle", "torque", fem_paths, calculix, bump.friction_coefficient)
     axis.set(xlabel="plate twist [rad] (depth held)", ylabel="T / (mu P)  [mm]",
              title=f"Bump twisted at the depth of {PEAK_TEXT}")
     axis.title.set_fontsize(9)

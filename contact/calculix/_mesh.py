@@ -103,6 +103,21 @@ def _numbered_quads(tags: np.ndarray, xyz: np.ndarray, connectivity: np.ndarray)
     return nodes, _counter_clockwise(nodes, _renumbered(tags, connectivity))
 
 
+def _with_rigid_band(nodes, quads, top_faces, band_xy, number, cells: int, base_y: float) -> AxisymmetricMesh:
+    """The mesh of a gel (nodes, quads, contact ``top_faces``) with a rigid body's band of ``cells`` quadratic quads
+    appended: ``band_xy`` its node positions, numbered by ``number[row, k]`` on three rows (the middle one at even
+    k only), face 1 of each quad the contact side; the gel's base nodes lie at y = ``base_y``, its axis at x = 0."""
+    band = np.array([[number[0, k], number[0, k + 2], number[2, k + 2], number[2, k], number[0, k + 1],
+                      number[1, k + 2], number[2, k + 1], number[1, k]] for k in range(0, 2 * cells, 2)])
+    gel = np.unique(quads)
+    base = gel[np.abs(nodes[gel - 1, 1] - base_y) < 1e-9]
+    axis = gel[np.abs(nodes[gel - 1, 0]) < 1e-9]
+    band_faces = np.column_stack([quads.shape[0] + 1 + np.arange(band.shape[0]), np.ones(band.shape[0], int)])
+    return AxisymmetricMesh(np.vstack([nodes, band_xy]), quads, band,
+                            np.array(top_faces, dtype=np.int64).reshape(-1, 2), band_faces, base, axis,
+                            np.array(sorted(number.values())))
+
+
 def axisymmetric_layer(layer_radius: float, thickness: float, sphere_radius: float, size_contact: float,
                        size_far: float, fine_radius: float, band_angle: float, band_thickness: float = 0.2
                        ) -> AxisymmetricMesh:
@@ -134,16 +149,7 @@ def axisymmetric_layer(layer_radius: float, thickness: float, sphere_radius: flo
                 continue
             number[ring, k] = first + len(band_xy)
             band_xy.append((radius * math.cos(angle), sphere_radius + radius * math.sin(angle)))
-    band = np.array([[number[0, k], number[0, k + 2], number[2, k + 2], number[2, k], number[0, k + 1],
-                      number[1, k + 2], number[2, k + 1], number[1, k]] for k in range(0, 2 * count, 2)])
-    band_nodes = np.array(sorted(number.values()))
-    nodes = np.vstack([nodes, band_xy])
-    layer = np.unique(quads)
-    base = layer[np.abs(nodes[layer - 1, 1] + thickness) < 1e-9]
-    axis = layer[np.abs(nodes[layer - 1, 0]) < 1e-9]
-    band_faces = np.column_stack([quads.shape[0] + 1 + np.arange(band.shape[0]), np.ones(band.shape[0], int)])
-    return AxisymmetricMesh(nodes, quads, band, np.array(top_faces, dtype=np.int64).reshape(-1, 2), band_faces,
-                            base, axis, band_nodes)
+    return _with_rigid_band(nodes, quads, top_faces, band_xy, number, count, -thickness)
 
 
 def axisymmetric_bump(bump_radius: float, base_radius: float, base_thickness: float, size_contact: float,
@@ -182,15 +188,7 @@ def axisymmetric_bump(bump_radius: float, base_radius: float, base_thickness: fl
                 continue
             number[row, k] = first + len(plate_xy)
             plate_xy.append((x, y))
-    band = np.array([[number[0, k], number[0, k + 2], number[2, k + 2], number[2, k], number[0, k + 1],
-                      number[1, k + 2], number[2, k + 1], number[1, k]] for k in range(0, 2 * cells, 2)])
-    nodes = np.vstack([nodes, plate_xy])
-    used = np.unique(quads)
-    base = used[np.abs(nodes[used - 1, 1] + height) < 1e-9]
-    axis = used[np.abs(nodes[used - 1, 0]) < 1e-9]
-    band_faces = np.column_stack([quads.shape[0] + 1 + np.arange(band.shape[0]), np.ones(band.shape[0], int)])
-    return AxisymmetricMesh(nodes, quads, band, np.array(top_faces, dtype=np.int64).reshape(-1, 2), band_faces,
-                            base, axis, np.array(sorted(number.values())))
+    return _with_rigid_band(nodes, quads, top_faces, plate_xy, number, cells, -height)
 
 
 def _counter_clockwise(nodes: np.ndarray, quads: np.ndarray) -> np.ndarray:
