@@ -55,11 +55,17 @@ class ContactState:
     shift: np.ndarray = field(default_factory=lambda: np.zeros(2))   # body tangential displacement [mm]
     angle: float = 0.0                # body rotation about +z through the twist centre [rad]
     status: np.ndarray | None = None  # (n,) OPEN / STICK / SLIP
+    # finite-strain gel only (contact._finite_strain): the displacement of every free dof [mm] and the gel's
+    # internal force on the fixed (base) dofs [N]; the linear gel's follow from the contact forces
+    gel_displacement: np.ndarray | None = None
+    fixed_force: np.ndarray | None = None
 
     def copy(self) -> "ContactState":
         return ContactState(self.normal_force.copy(), self.tangential_force.copy(), self.displacement.copy(),
                             self.depth, self.shift.copy(), self.angle,
-                            None if self.status is None else self.status.copy())
+                            None if self.status is None else self.status.copy(),
+                            None if self.gel_displacement is None else self.gel_displacement.copy(),
+                            None if self.fixed_force is None else self.fixed_force.copy())
 
 
 @dataclass(frozen=True)

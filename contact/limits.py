@@ -13,7 +13,8 @@ While solving (``check_increment_limits``), on each converged increment: the com
 (same thresholds), its contact width and load ratios against the small-strain envelope (a warning per quantity), and,
 for a sphere, the distance a contact point has slid against the contact radius (the gap is paired at the start:
 small sliding); past SLIDING_WARN a warning, past SLIDING_REFUSE refused.
-A refusal is ``PhysicalLimitError`` (a ValueError); a warning is ``PhysicalLimitWarning``.
+A refusal is ``PhysicalLimitError`` (a ValueError); a warning is ``PhysicalLimitWarning``. The finite-strain gel
+(``material.law = "neo_hookean"``) is not warned about strain or the small-strain envelope; its refusals stand.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ import warnings
 import numpy as np
 
 from contact.envelope import outside_envelope
-from contact.scene import BodyShape, GelShape, LoadKind, Scene, Volumetric
+from contact.scene import BodyShape, GelShape, LoadKind, MaterialLaw, Scene, Volumetric
 
 __all__ = ["PhysicalLimitError", "PhysicalLimitWarning", "check_scene_limits", "check_increment_limits",
            "check_resources", "estimate_resources", "machine_memory", "available_memory", "contact_centers",
@@ -155,12 +156,13 @@ def check_scene_limits(scene: Scene) -> list[str]:
     depth = _estimated_depth(scene)
     strain = depth / thickness
     problems, notes = [], []
+    small_strain = scene.material.law == MaterialLaw.LINEAR     # the finite-strain gel needs no strain warning
     level = _level(strain, SMALL_STRAIN_WARN, SMALL_STRAIN_REFUSE)
     if level == 2:
         problems.append(f"the largest press would indent the gel about {depth:.3g} mm into its {thickness:g} mm "
                         f"(d/H = {strain:.3g}, half-space estimate): past d/H = {SMALL_STRAIN_REFUSE} a linear, "
                         f"small-strain gel means nothing; lower the press")
-    elif level == 1:
+    elif level == 1 and small_strain:
         notes.append(f"the largest press indents the gel about {depth:.3g} mm into its {thickness:g} mm (d/H = "
                      f"{strain:.2f} > {SMALL_STRAIN_WARN}): past small strain, the linear answer is less accurate")
     radius = _contact_curvature_radius(scene)
@@ -171,7 +173,7 @@ def check_scene_limits(scene: Scene) -> list[str]:
             problems.append(f"the contact radius would be about {contact_radius:.3g} mm on a curvature radius of "
                             f"{radius:.3g} mm (a/R = {width:.3g} >= {CONTACT_WIDTH_REFUSE}): not a small contact; "
                             f"lower the press")
-        else:
+        elif small_strain:
             loads = {load.kind.value for load in scene.loads}
             outside = outside_envelope(width, *_planned_load_ratios(scene, contact_radius), loads)
             if outside:
@@ -197,11 +199,13 @@ def check_increment_limits(scene: Scene, depth: float, slid: float, contact_radi
     if level == 2:
         raise PhysicalLimitError(f"increment {number}: the body is {depth:.3g} mm into the {thickness:g} mm gel "
                                  f"(d/H = {strain:.3g} >= {SMALL_STRAIN_REFUSE}): past small strain, refused", result)
-    if level == 1 and "strain" not in warned:
+    small_strain = scene.material.law == MaterialLaw.LINEAR
+    if level == 1 and "strain" not in warned and small_strain:
         warned.add("strain")
         warnings.warn(f"increment {number}: depth {depth:.3g} mm of the {thickness:g} mm gel (d/H = {strain:.2f} > "
                       f"{SMALL_STRAIN_WARN}): past small strain", PhysicalLimitWarning, stacklevel=3)
-    _check_envelope(scene, number, result, warned)
+    if small_strain:
+        _check_envelope(scene, number, result, warned)
     if scene.body.shape != BodyShape.SPHERE or contact_radius <= 0.0:
         return                                   # a plane slides along itself, and a sphere twists in place
     sliding = slid / contact_radius

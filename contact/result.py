@@ -131,9 +131,13 @@ def record_increment(kind, state: ContactState, iterations, history, model, fact
     forces[dofs[:, 0]] = state.tangential_force[:, 0]
     forces[dofs[:, 1]] = state.tangential_force[:, 1]
     forces[dofs[:, 2]] = -state.normal_force
-    u_free = factorization.solve(forces[model.free_dofs])
     reaction = np.zeros(model.n_dofs)
-    reaction[model.fixed_dofs] = model.stiffness_fixed_free @ u_free
+    if state.gel_displacement is None:
+        u_free = factorization.solve(forces[model.free_dofs])
+        reaction[model.fixed_dofs] = model.stiffness_fixed_free @ u_free
+    else:                                           # the finite-strain gel (contact._finite_strain) carries its own
+        u_free = state.gel_displacement
+        reaction[model.fixed_dofs] = state.fixed_force
     base_forces = reaction[model.base.dofs]                              # (n_base, 3) support force on the gel
     displacement_full = model.full_vector(u_free)
     check_no_penetration(model, candidates, displacement_full, scene, state.depth)

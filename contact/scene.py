@@ -2,8 +2,8 @@
 
 Types are strict and every problem of a file is reported at once (``fem.validation.InputErrors``, one line per
 problem naming the key, its value and what is allowed). String options become enums where they enter
-(``GelShape``, ``BodyShape``, ``Symmetry``, ``Volumetric``, ``LoadKind``, ``LoadControl``). The friction coefficient
-is ``friction_coefficient`` everywhere; the old key ``mu`` is refused with the new name.
+(``GelShape``, ``BodyShape``, ``Symmetry``, ``Volumetric``, ``MaterialLaw``, ``LoadKind``, ``LoadControl``). The
+friction coefficient is ``friction_coefficient`` everywhere; the old key ``mu`` is refused with the new name.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from fem.validation import (Choice, InputErrors, check_all, check_bool, check_in
 from contact._toml_file import MAX_TOML_BYTES, read_toml_file  # noqa: F401  (re-exported: contact.scene's API)
 
 __all__ = ["GelSpec", "Material", "BodySpec", "ContactSpec", "MeshSettings", "Load", "LoadKind", "LoadControl",
-           "GelShape", "BodyShape", "Symmetry", "Volumetric", "Scene", "load_scene", "scene_from_dict",
+           "GelShape", "BodyShape", "Symmetry", "Volumetric", "MaterialLaw", "Scene", "load_scene", "scene_from_dict",
            "read_toml_file", "RENAMED_KEYS"]
 
 
@@ -51,6 +51,11 @@ class BodyShape(Choice):
 class Symmetry(Choice):
     AUTO = "auto"                     # half model when the scene is mirror-symmetric about y = 0
     OFF = "off"
+
+
+class MaterialLaw(Choice):
+    LINEAR = "linear"                 # small strain: stress from the linearized strain, equilibrium on the start shape
+    NEO_HOOKEAN = "neo_hookean"       # compressible Neo-Hookean, finite strain (fem.hyperelastic)
 
 
 class Volumetric(Choice):
@@ -133,13 +138,19 @@ class GelSpec:
 
 @dataclass(frozen=True)
 class Material:
-    """Linear-elastic gel: Young's modulus E [MPa] and Poisson's ratio nu (0.5 excluded)."""
+    """The gel: Young's modulus E [MPa] and Poisson's ratio nu (0.5 excluded) at small strain, and its ``law``:
+    LINEAR (small strain) or NEO_HOOKEAN (compressible Neo-Hookean with the same small-strain moduli; finite strain,
+    ``contact._finite_strain``; a plane body and the standard volumetric term only, checked by ``Scene``)."""
 
     E: float = 1.0
     nu: float = 0.45
+    law: MaterialLaw = MaterialLaw.LINEAR
 
     def __post_init__(self):
-        check_all(lambda: check_positive("material.E", self.E, "MPa"),
+        def law():
+            object.__setattr__(self, "law", parse_choice("material.law", self.law, MaterialLaw))
+
+        check_all(law, lambda: check_positive("material.E", self.E, "MPa"),
                   lambda: check_range("material.nu", self.nu, -1.0, 0.5, low_open=True, high_open=True))
 
     @property
@@ -307,6 +318,15 @@ class Scene:
             raise ValueError("scene has no [[load]]: give at least one press")
         if self.loads[0].kind != LoadKind.PRESS:
             raise ValueError(f"load.0.kind={self.loads[0].kind.value!r}: the first load must be a press")
+        if self.material.law == MaterialLaw.NEO_HOOKEAN:
+            # the finite-strain gel pairs the gap along z with the points where they have moved to: exact for a
+            # plane (its normal stays z), not for a sphere, whose normal at a moved point tilts
+            if self.body.shape != BodyShape.PLANE:
+                raise ValueError(f"material.law='neo_hookean' with body.shape={self.body.shape.value!r}: the "
+                                 f"finite-strain gel needs body.shape='plane'")
+            if self.mesh.volumetric != Volumetric.STANDARD:
+                raise ValueError(f"material.law='neo_hookean' with mesh.volumetric={self.mesh.volumetric.value!r}: "
+                                 f"the finite-strain gel needs mesh.volumetric='standard'")
 
     @property
     def mirror_symmetric(self) -> bool:

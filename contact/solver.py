@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from contact._finite_strain import FiniteStrainGel, solve_finite_strain_increment
 from contact._controls import check_feasible, controls as load_controls, scaled, solve_with_substeps
 from contact._newton import OPEN, SLIP, STICK, ContactNotConverged, ContactState, solve_increment
 from contact._newton_linear import NewtonLinearSolver
@@ -17,7 +18,7 @@ from contact.compliance import ColumnCache, SurfaceCompliance, compliance_cache_
 from contact.limits import (PhysicalLimitError, check_increment_limits, check_resources, check_scene_limits,
                             contact_centers, estimated_contact, fine_depth, fine_zone)
 from contact.recovery import surface_triangles
-from contact.scene import Scene
+from contact.scene import MaterialLaw, Scene
 from fem.elasticity import ElasticModel, assemble_elastic_model
 from fem.linear_solver import SaddlePointFactorization, SpdFactorization
 from fem.progress import ticking
@@ -42,6 +43,7 @@ class Prepared:
     fine_radius: float
     half: bool                        # mirror-symmetric half model (y >= 0): forces and areas count twice
     compliances: dict = field(default_factory=dict)   # SurfaceCompliance per candidate set, reused across solves
+    finite_strain: object = None      # contact._finite_strain.FiniteStrainGel, built by the first finite-strain solve
 
 
 def _fine_radius_and_half(scene: Scene) -> tuple[float, bool]:
@@ -192,7 +194,11 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
     seconds_before = compliance.seconds
     positions = model.top.positions[candidates]
     gap0 = scene.body.initial_gap(positions[:, :2]) - positions[:, 2]       # the gel's top point is at z = 0
-    lever = np.column_stack([-(positions[:, 1] - scene.body.center[1]), positions[:, 0] - scene.body.center[0]])
+    def lever_at(xy):
+        """Rigid twist motion per radian at points xy (n, 2): (-(y - y_c), x - x_c) [mm/rad]."""
+        return np.column_stack([-(xy[:, 1] - scene.body.center[1]), xy[:, 0] - scene.body.center[0]])
+
+    lever = lever_at(positions[:, :2])
     areas = model.top.areas[candidates]
     candidate_triangles = surface_triangles(model.top.triangles, candidates, model.top.areas.size)
     augmentation = _augmentation(areas, scene.material.effective_modulus)
@@ -205,6 +211,15 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
     result = ContactResult(scene, model, candidates, timings=timings, mesh_info=dict(prepared.mesh_info),
                            left_out=left_out, candidate_bump=assign_bumps(positions, centers), bump_centers=centers)
     controls = list(load_controls(scene))
+    finite_strain = None
+    if scene.material.law == MaterialLaw.NEO_HOOKEAN:
+        if prepared.finite_strain is None:
+            prepared.finite_strain = FiniteStrainGel(model, scene.material.E, scene.material.nu)
+        finite_strain = prepared.finite_strain
+        iterations_before = finite_strain.iterations
+        left_out.append("finite strain: the gap is paired along z at each point's moved position (exact for the "
+                        "plane body); an increment's twist turns the points about the lever arms they have at its "
+                        "start (first order in the increment's angle)")
     warned: set = set()
     linear_solver = NewtonLinearSolver()
     bar = None
@@ -217,6 +232,8 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
         for kind, control, friction_on in controls:
             step_start = time.perf_counter()
             control = scaled(control, 1.0 / multiplicity)
+            if finite_strain is not None:          # the plate turns the points where they are, not where they were
+                lever = lever_at(positions[:, :2] + state.displacement[:, :2])
             try:
                 check_feasible(control, state, scene.contact.friction_coefficient, lever)
             except ValueError as error:
@@ -224,6 +241,12 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
             friction_coefficient = scene.contact.friction_coefficient if friction_on else 0.0
 
             def solve(start_state, target):
+                if finite_strain is not None:
+                    return solve_finite_strain_increment(finite_strain, candidates, gap0, lever, augmentation,
+                                                         friction_coefficient, start_state, target,
+                                                         seed_depth=seed_depth, tolerance=scene.contact.tolerance,
+                                                         max_iterations=scene.contact.max_iterations,
+                                                         mirror_y=prepared.half, frictional=frictional)
                 return solve_increment(compliance, gap0, lever, augmentation, friction_coefficient, start_state,
                                        target, seed_depth=seed_depth, tolerance=scene.contact.tolerance,
                                        max_iterations=scene.contact.max_iterations, mirror_y=prepared.half,
@@ -268,6 +291,8 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
         timings["newton_linear_seconds"] = linear_solver.seconds
         timings["newton_factorizations"] = linear_solver.factorizations
         timings["newton_krylov_iterations"] = linear_solver.krylov_iterations
+        if finite_strain is not None:
+            timings["finite_strain_newton_iterations"] = finite_strain.iterations - iterations_before
         if column_cache is not None and compliance.computed_columns > columns_before:
             key = disk_key or compliance_cache_key(model, scene.material.E, scene.material.nu, candidates, components,
                                                    prepared.half)

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["SaddlePointFactorization", "SpdFactorization", "available_backends"]
+__all__ = ["SaddlePointFactorization", "SpdFactorization", "available_backends", "solve_sparse"]
 
 # MKL PARDISO controls for the saddle-point system, 1-based as in the MKL manual. Setting iparm 1 makes PARDISO take
 # them instead of its defaults, which also refine every solve twice and so triple its cost. The matrix is
@@ -263,3 +263,22 @@ class SaddlePointFactorization(_Factorization):
         else:
             solution = self._lu.solve(padded)
         return solution[:self.size]
+
+
+def solve_sparse(matrix: sp.spmatrix, rhs: np.ndarray, backend: str | None = None) -> np.ndarray:
+    """x of A x = rhs for one sparse square matrix A, not necessarily symmetric: MKL PARDISO (real unsymmetric,
+    mtype 11) or SuperLU; RuntimeError when A is singular (a solution that is not finite)."""
+    backend = _check_backend(backend)
+    if backend == "pardiso":
+        solver = _pypardiso().PyPardisoSolver(mtype=11)
+        try:
+            solution = solver.solve(sp.csr_matrix(matrix), np.asarray(rhs, dtype=float))
+        finally:
+            solver.free_memory(everything=True)
+    else:
+        from scipy.sparse.linalg import splu
+
+        solution = splu(sp.csc_matrix(matrix)).solve(np.asarray(rhs, dtype=float))
+    if not np.all(np.isfinite(solution)):
+        raise RuntimeError("the matrix is singular: the solution is not finite")
+    return solution

@@ -23,7 +23,7 @@ __all__ = ["press_rows", "shear_rows", "twist_rows", "envelope", "MIN_ELEMENTS_P
 # discretisation, which a finite-strain reference cannot judge, so those rows do not bound the envelope
 MIN_ELEMENTS_PER_RADIUS = 5.0
 
-MODELS = ("fem_linear", "calculix_linear", "calculix_neo_hooke")
+MODELS = ("fem_linear", "fem_neo_hooke", "calculix_linear", "calculix_neo_hooke")
 JUDGED_WITHIN_CALCULIX = ("stick_ratio", "stick_ratio_twist")
 
 
@@ -32,45 +32,67 @@ def _loglog(x, xp, fp):
 
 
 def _row(problem, quantity, load_name, load, values, relative, extra):
-    fem, linear, neo = (values.get(m, math.nan) for m in MODELS)      # a CalculiX run that failed: NaN
+    """One comparison: the models' values (NaN where a model did not run or reach the load), the linear FEM's error
+    against CalculiX's Neo-Hookean gel (``judged_error``, deciding the envelope) and against the FEM's own
+    Neo-Hookean gel (``error_fem_vs_fem_neo_hooke``), the FEM Neo-Hookean gel's error against CalculiX's
+    (its validation), and the finite-strain effect (Neo-Hookean / linear) as each code sees it."""
+    fem, fem_neo, linear, neo = (values.get(m, math.nan) for m in MODELS)
     error = (lambda a, b: a / b - 1.0) if relative else (lambda a, b: a - b)
     tolerance = SMALL_STRAIN_TOLERANCE[quantity]
     fem_error = error(fem, neo)
     # CalculiX's stick ratio is read from point motions over coarse increments, not the FEM's contact status: there
     # what finite strain changes is judged within CalculiX, its linear gel against its Neo-Hookean one
     judged = error(linear, neo) if quantity in JUDGED_WITHIN_CALCULIX else fem_error
+    own = error(fem, fem_neo)
     return dict(problem=problem, quantity=quantity, load_name=load_name, load=load,
                 **{m: values.get(m, math.nan) for m in MODELS},
                 error_fem_vs_neo_hooke=fem_error, error_fem_vs_calculix_linear=error(fem, linear),
                 error_calculix_linear_vs_neo_hooke=error(linear, neo), relative_error=relative, tolerance=tolerance,
-                judged_error=judged, within_tolerance=bool(abs(judged) <= tolerance), **extra)
+                judged_error=judged, within_tolerance=bool(abs(judged) <= tolerance),
+                error_fem_vs_fem_neo_hooke=own, within_tolerance_fem_neo_hooke=bool(abs(own) <= tolerance),
+                error_fem_neo_hooke_vs_neo_hooke=error(fem_neo, neo),
+                finite_strain_effect_fem=error(fem_neo, fem), finite_strain_effect_calculix=error(neo, linear),
+                **extra)
 
 
-def press_rows(problem: str, radius: float, fem: list, calculix: dict, element_size: float) -> list[dict]:
+def press_rows(problem: str, radius: float, fem: list, calculix: dict, element_size: float,
+               fem_neo_hooke: list | None = None) -> list[dict]:
     """The press at the FEM's increments inside CalculiX's range: the normal force at equal depth, the contact radius
     and (bump) the base force's radius of gyration at equal force (the closed loop sets forces, not depths).
-    ``fem``: (depth, force, contact radius[, base spread]) per increment; ``calculix``: records with depth,
-    normal_force, contact_radius, base_spread by model; ``radius``: the sphere's or bump's radius R [mm];
-    ``element_size``: the FEM's h [mm] (a row is ``resolved`` when its contact radius is at least 5 h)."""
+    ``fem``: (depth, force, contact radius[, base spread]) per increment; ``fem_neo_hooke``: the same of the FEM's
+    Neo-Hookean gel at the same forces and beyond (its depth must reach the linear one's); ``calculix``: records
+    with depth, normal_force, contact_radius, base_spread by model; ``radius``: the sphere's or bump's radius R
+    [mm]; ``element_size``: the FEM's h [mm] (a row is ``resolved`` when its contact radius is at least 5 h)."""
     curves = {name: np.array([(r.depth, r.normal_force, r.contact_radius, r.base_spread) for r in records
                               if r.normal_force > 0 and r.contact_radius > 0]) for name, records in calculix.items()}
     depths = (max(c[:, 0].min() for c in curves.values()), min(c[:, 0].max() for c in curves.values()))
     forces = (max(c[:, 1].min() for c in curves.values()), min(c[:, 1].max() for c in curves.values()))
+    own = np.array([item[:4] for item in fem_neo_hooke]) if fem_neo_hooke else None
     rows = []
     for item in fem:
         depth, force, contact_radius = item[:3]
         spread = item[3] if len(item) > 3 else math.nan
         base = dict(depth_over_radius=depth / radius, contact_radius_over_radius=contact_radius / radius,
                     normal_force_fem=force, resolved=bool(contact_radius >= MIN_ELEMENTS_PER_RADIUS * element_size))
+        at_force = {}
+        if own is not None:
+            same = np.flatnonzero(np.isclose(own[:, 1], force, rtol=1e-6))
+            at_force = {} if same.size == 0 else dict(zip(("contact_radius", "spread"), own[same[0], 2:4]))
         if depths[0] <= depth <= depths[1]:
             values = {"fem_linear": force, **{n: _loglog(depth, c[:, 0], c[:, 1]) for n, c in curves.items()}}
+            if own is not None and own[0, 0] <= depth <= own[-1, 0]:
+                values["fem_neo_hooke"] = _loglog(depth, own[:, 0], own[:, 1])
             rows.append(_row(problem, "normal_force", "depth_over_radius", depth / radius, values, True, base))
         if forces[0] <= force <= forces[1]:
             values = {"fem_linear": contact_radius, **{n: _loglog(force, c[:, 1], c[:, 2]) for n, c in curves.items()}}
+            if "contact_radius" in at_force:
+                values["fem_neo_hooke"] = float(at_force["contact_radius"])
             rows.append(_row(problem, "contact_radius", "depth_over_radius", depth / radius, values, True, base))
             if math.isfinite(spread):
                 values = {"fem_linear": spread, **{n: float(np.interp(force, c[:, 1], c[:, 3]))
                                                    for n, c in curves.items()}}
+                if "spread" in at_force:
+                    values["fem_neo_hooke"] = float(at_force["spread"])
                 rows.append(_row(problem, "base_pressure_spread", "depth_over_radius", depth / radius, values, True,
                                  base))
     return rows
@@ -83,10 +105,11 @@ def _monotone(x, *columns):
     return (x[:stop],) + tuple(c[:stop] for c in columns)
 
 
-def shear_rows(fem: list, calculix: dict, friction_coefficient: float) -> list[dict]:
+def shear_rows(fem: list, others: dict, friction_coefficient: float, problem: str = "bump_shear") -> list[dict]:
     """Tangential compliance (plate shift / Q [mm/N]), recovered stick ratio and base CoP shift at the FEM's load ratios
     Q/(mu P); ``fem``: dicts with normal_force, tangential_force, shift, stick_ratio, base_cop_x per increment (the
-    first the pressed state); ``calculix``: records by model (first the pressed state)."""
+    first the pressed state); ``others``: the other models' records (dicts or CalculiX records, first the pressed
+    state) by model name."""
     def curve(items):
         pressed = items[0]["base_cop_x"]
         table = np.array([(i["tangential_force"] / (friction_coefficient * i["normal_force"]),
@@ -94,11 +117,12 @@ def shear_rows(fem: list, calculix: dict, friction_coefficient: float) -> list[d
                            i["base_cop_x"] - pressed) for i in items[1:]])
         return _monotone(*table.T)
 
-    return _at_fem_ratios("bump_shear", "load_ratio", (("tangential_compliance", True), ("stick_ratio", False),
-                                                       ("base_cop_shift", True)), curve, fem, calculix)
+    return _at_fem_ratios(problem, "load_ratio", (("tangential_compliance", True), ("stick_ratio", False),
+                                                  ("base_cop_shift", True)), curve, fem, others)
 
 
-def twist_rows(fem: list, calculix: dict, friction_coefficient: float, contact_radius: float) -> list[dict]:
+def twist_rows(fem: list, others: dict, friction_coefficient: float, contact_radius: float,
+               problem: str = "bump_twist") -> list[dict]:
     """Torsional compliance (twist angle / torque [rad/(N mm)]) and recovered stick ratio at the FEM's torque ratio
     T/(mu P a), a the FEM's contact radius [mm] at the held depth (one scale for every model: full slip of a Hertz
     contact at 3 pi / 16 = 0.59)."""
@@ -107,15 +131,16 @@ def twist_rows(fem: list, calculix: dict, friction_coefficient: float, contact_r
                            i["angle"] / i["torque"], i["stick_ratio"]) for i in items[1:]])
         return _monotone(*table.T)
 
-    return _at_fem_ratios("bump_twist", "torque_ratio", (("torsional_compliance", True), ("stick_ratio_twist", False)),
-                          curve, fem, calculix)
+    return _at_fem_ratios(problem, "torque_ratio", (("torsional_compliance", True), ("stick_ratio_twist", False)),
+                          curve, fem, others)
 
 
-def _at_fem_ratios(problem: str, axis: str, quantities, curve, fem: list, calculix: dict) -> list[dict]:
-    """One row per quantity at each of the FEM's load ratios up to the highest every CalculiX model reached; each
+def _at_fem_ratios(problem: str, axis: str, quantities, curve, fem: list, others: dict) -> list[dict]:
+    """One row per quantity at each of the linear FEM's load ratios up to the highest every other model reached; each
     model's curve (``curve`` of its records: the ratio, then one column per quantity) read at that ratio."""
     models = {"fem_linear": curve(fem),
-              **{name: curve([vars(r) for r in records]) for name, records in calculix.items()}}
+              **{name: curve([r if isinstance(r, dict) else vars(r) for r in records])
+                 for name, records in others.items()}}
     top = min(c[0].max() for name, c in models.items() if name != "fem_linear")
     rows = []
     for k, ratio in enumerate(models["fem_linear"][0]):
@@ -128,32 +153,43 @@ def _at_fem_ratios(problem: str, axis: str, quantities, curve, fem: list, calcul
     return rows
 
 
-def envelope(rows: list[dict]) -> dict:
+def envelope(rows: list[dict], reference: str = "calculix_neo_hooke") -> dict:
     """Per (problem, quantity): the load range over which the FEM stays within the tolerance of the Neo-Hookean gel:
     from its first row within tolerance (``holds_from``; the misses before it are loads where the FEM's own mesh
     error dominates, a contact of a few elements, which a finite-strain reference cannot judge: ``resolved`` says
-    where a >= 5 h) up to the last row before the next miss (``holds_to``; None if no row is within), the largest
+    where a >= 5 h) up to the last row before the next miss (``holds_to``; both None if no row is within), the largest
     error at or above ``holds_from`` and the load it is at. Rows without a Neo-Hookean value (its run failed) are
-    left out."""
+    left out. ``reference``: "calculix_neo_hooke" (the independent gel) or "fem_neo_hooke" (the project's own
+    finite-strain gel, validated on the press against CalculiX's)."""
+    error, within = {"calculix_neo_hooke": ("judged_error", "within_tolerance"),
+                     "fem_neo_hooke": ("error_fem_vs_fem_neo_hooke", "within_tolerance_fem_neo_hooke")}[reference]
     found = {}
     for key in dict.fromkeys((r["problem"], r["quantity"]) for r in rows):
         series = sorted((r for r in rows if (r["problem"], r["quantity"]) == key
-                         and math.isfinite(r["judged_error"])), key=lambda r: r["load"])
-        start = next((k for k, row in enumerate(series) if row["within_tolerance"]), None)
-        if start is None:
+                         and math.isfinite(r[error])), key=lambda r: r["load"])
+        if not series:
+            continue
+        start = next((k for k, row in enumerate(series) if row[within]), None)
+        if start is None:                            # outside at every load measured
+            worst = max(series, key=lambda r: abs(r[error]))
+            found[f"{key[0]}:{key[1]}"] = dict(
+                load_name=series[0]["load_name"], holds_from=None, holds_to=None,
+                holds_to_contact_radius_over_radius=None, tested_to=series[-1]["load"],
+                tolerance=series[0]["tolerance"], largest_error=worst[error], at_load=worst["load"],
+                first_miss=series[0]["load"], first_miss_error=series[0][error], reference=reference)
             continue
         held = start
-        while held + 1 < len(series) and series[held + 1]["within_tolerance"]:
+        while held + 1 < len(series) and series[held + 1][within]:
             held += 1
         judged = series[start:]
-        worst = max(judged, key=lambda r: abs(r["judged_error"]))
+        worst = max(judged, key=lambda r: abs(r[error]))
         found[f"{key[0]}:{key[1]}"] = dict(
             load_name=series[0]["load_name"], holds_from=series[start]["load"], holds_to=series[held]["load"],
             holds_to_contact_radius_over_radius=series[held].get("contact_radius_over_radius"),
             tested_to=series[-1]["load"], tolerance=series[0]["tolerance"],
-            largest_error=worst["judged_error"], at_load=worst["load"],
+            largest_error=worst[error], at_load=worst["load"],
             first_miss=None if held + 1 == len(series) else series[held + 1]["load"],
-            first_miss_error=None if held + 1 == len(series) else series[held + 1]["judged_error"])
+            first_miss_error=None if held + 1 == len(series) else series[held + 1][error], reference=reference)
     return found
 
 
@@ -162,12 +198,16 @@ SHEAR_AND_TWIST_QUANTITIES = (("tangential_compliance", "shear"), ("stick_ratio"
                               ("stick_ratio_twist", "twist"))
 
 
-def envelope_bounds(found: dict, hold_contact_width: float, measured: str, unmeasured: str = "") -> list:
+def envelope_bounds(found: dict, hold_contact_width: float, measured: str, unmeasured: str = "",
+                    own: dict | None = None, peak_contact_width: float | None = None) -> list:
     """The envelope as ``contact.envelope.EnvelopeBound`` s: per quantity the tightest bound over the problems that
     measured it. A press quantity holds to the a/R of its last row within tolerance (``envelope``); a shear or twist
     quantity to its last load ratio within tolerance, at ``hold_contact_width`` (the FEM bump's a/R at the held
-    depth). ``measured`` names the run. A shear or twist quantity without a Neo-Hookean value is bounded by the
-    tightest press bound, marked ``assumed`` with the reason ``unmeasured``."""
+    depth). ``measured`` names the run. A shear or twist quantity without a CalculiX Neo-Hookean value is bounded by
+    ``own``, the envelope against the FEM's own Neo-Hookean gel (``envelope(..., reference="fem_neo_hooke")``), at
+    the peak's contact width ``peak_contact_width`` up to the smaller of the hold's and the peak's load ratios (0:
+    outside at every ratio measured); without it, by the tightest press bound, marked ``assumed`` with the reason
+    ``unmeasured``."""
     from contact.envelope import EnvelopeBound
 
     tightest = {}
@@ -184,7 +224,17 @@ def envelope_bounds(found: dict, hold_contact_width: float, measured: str, unmea
         if held is None or (bound.contact_width, bound.load_ratio) < (held.contact_width, held.load_ratio):
             tightest[quantity] = bound
     press = min((b.contact_width for b in tightest.values() if b.load == "press"), default=0.0)
+    own = own or {}
     for quantity, load in SHEAR_AND_TWIST_QUANTITIES:
-        if quantity not in tightest:                # no Neo-Hookean run: only what the press says
+        if quantity in tightest:
+            continue
+        hold, peak = own.get(f"bump_{load}:{quantity}"), own.get(f"bump_{load}_peak:{quantity}")
+        if hold is None:                             # no Neo-Hookean run: only what the press says
             tightest[quantity] = EnvelopeBound(quantity, load, press, math.inf, unmeasured, assumed=True)
+            continue
+        ratio = min(item["holds_to"] or 0.0 for item in (hold, peak) if item is not None)
+        width = peak_contact_width if peak is not None and peak_contact_width else hold_contact_width
+        tightest[quantity] = EnvelopeBound(quantity, load, round(width, 2), round(ratio, 2),
+                                           f"bump_{load} and its peak against the project's Neo-Hookean gel "
+                                           f"(contact._finite_strain, validated on the press), {measured}")
     return list(tightest.values())

@@ -18,7 +18,8 @@ and of its factor, factorization time and the time of 256 unit right-hand sides 
 points nearest the contact), in benchmark_factorizations.csv / .json.
 
 ``--substeps`` times a 3x3 array's twist path with and without remembered Newton sub-steps
-(``studies._benchmark_substeps``).
+(``studies._benchmark_substeps``). ``--finite-strain`` times a bump's shear and twist paths with the Neo-Hookean gel
+against the linear one (``studies._benchmark_finite_strain``).
 
 Threads: every mode states the thread settings (MKL_NUM_THREADS, OMP_NUM_THREADS, OPENBLAS_NUM_THREADS,
 NUMBA_NUM_THREADS and the pools' sizes) and, with ``--threads both`` (the default), times the same work with one
@@ -56,12 +57,14 @@ def add_arguments(parser) -> None:
                              "system on the stability block instead of timing HCM-1")
     parser.add_argument("--substeps", action="store_true",
                         help="a 3x3 array's twist path with and without remembered Newton sub-steps, side by side")
+    parser.add_argument("--finite-strain", action="store_true",
+                        help="a bump's shear and twist paths with the Neo-Hookean gel against the linear one")
     parser.add_argument("--threads", choices=("both", "1", "default"), default="both",
                         help="time with one thread, the default threads, or both side by side (default)")
 
 
 def run(out_dir, quick: bool = False, repeats: int = 3, factorizations: bool = False, scaling: bool = False,
-        substeps: bool = False, threads: str = "both") -> dict:
+        substeps: bool = False, threads: str = "both", finite_strain: bool = False) -> dict:
     """Time the HCM-1 path; write benchmark.csv (one row per thread setting and repeat) and benchmark.json (the
     thread settings, then the medians per thread setting)."""
     from contact.scene import load_scene
@@ -79,6 +82,10 @@ def run(out_dir, quick: bool = False, repeats: int = 3, factorizations: bool = F
         from studies._benchmark_substeps import compare_substeps
 
         return compare_substeps(out_dir, quick, 1 if quick else repeats, modes)
+    if finite_strain:
+        from studies._benchmark_finite_strain import compare_finite_strain
+
+        return compare_finite_strain(out_dir, quick, 1 if quick else repeats, modes)
     scene = load_scene(SCENE)
     if quick:
         scene = dataclasses.replace(scene, mesh=dataclasses.replace(scene.mesh, size_contact=0.25))

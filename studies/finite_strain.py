@@ -44,6 +44,7 @@ HOLD_PRESS_FORCES = tuple(f for f in PRESS_FORCES if f <= HOLD_BUMP_FORCE)
 # the hold (CalculiX's Neo-Hookean gel diverges at that switch: residual ~1600 N, too many cutbacks). With friction
 # from the start CalculiX 2.20 stops inside spooles (exit code 255) during the press, linear and Neo-Hookean alike
 FRICTIONAL_PRESS = {"shear": False, "twist": False}
+NEO_HOOKE_PRESS = PRESS_FORCES + (3.2,)   # N: the FEM's Neo-Hookean press goes past the linear one's peak depth
 PRESS_REACH = 1.15          # the axisymmetric CalculiX press goes this far past the FEM's depth at the peak force
 SPHERE_FORCES = (0.05, 0.15, 0.3, 0.5, 0.8, 1.2, 1.7, 2.3, 3.0, 3.6, 4.4)   # N: d = 0.12 ... 1.98 mm
 SETTINGS = {          # CalculiX sphere h, bump h, increments; the FEM's h for the layer and the bump [mm]
@@ -84,12 +85,26 @@ def _fem_sphere(setup, size):
     return [(inc.depth, inc.normal_force, _current_radius(result, inc)) for inc in result.increments]
 
 
-def _fem_bump(setup, path, values, size, press_forces=PRESS_FORCES, hold=True):
-    """The FEM's press (per force [N]) and path increments as dicts, with the base pressure's CoP [mm]."""
+def _fem_bump(setup, path, values, size, press_forces=PRESS_FORCES, hold=True, law="linear", stopped=None):
+    """The FEM's press (per force [N]) and path increments as dicts, with the base pressure's CoP [mm]; ``law``:
+    the gel's ``contact.scene.MaterialLaw`` ("linear" or "neo_hookean"). A path that stops early keeps its
+    converged increments and is named in ``stopped`` (scene name -> reason)."""
     from contact.calculix import bump_scene
     from contact.solver import solve_scene
 
-    result = solve_scene(bump_scene(setup, path, values, press_forces, size_contact=size, hold=hold))
+    from contact.result import PathNotCompleted
+
+    scene = bump_scene(setup, path, values, press_forces, size_contact=size, hold=hold)
+    scene = dataclasses.replace(scene, name=f"{scene.name}_{law}_{setup.depth:.3f}",
+                                material=dataclasses.replace(scene.material, law=law))
+    try:
+        result = solve_scene(scene)
+    except PathNotCompleted as error:        # the increments before the one that failed are kept and reported
+        result = error.result
+        reason = f"after {len(result.increments)} increments: {str(error)[:300]}"
+        if stopped is not None:
+            stopped[scene.name] = reason
+        print(f"{NAME}: {scene.name} stopped {reason}")
     base = result.model.base
     rows = []
     for inc in result.increments:
@@ -103,6 +118,42 @@ def _fem_bump(setup, path, values, size, press_forces=PRESS_FORCES, hold=True):
                          stick_ratio=inc.recovered_stick_ratio,
                          base_cop_x=float((base.positions[:, 0] * force).sum() / force.sum())))
     return rows, result
+
+
+NEO_HOOKE = "neo_hookean"
+# the peak's shear and twist paths, stretched from the 1.5 N hold's so that they too reach gross slip: the slip
+# force grows like P, the twist's slip angle about like P / a^3 * a P ~ P^(1/3) ... P^(1/2) (Hertz a ~ P^(1/3))
+PEAK_PATH_SCALE = {"shear": PEAK_BUMP_FORCE / HOLD_BUMP_FORCE, "twist": (PEAK_BUMP_FORCE / HOLD_BUMP_FORCE) ** 0.5}
+
+
+NEO_HOOKE_REFERENCE = "fem_neo_hooke"
+
+
+def _neo_hooke_validation(rows: list[dict]) -> dict:
+    """The FEM's Neo-Hookean gel against CalculiX's on the bump's press, where the FEM resolves the contact: per
+    quantity the largest error and whether it is within the quantity's tolerance, and the largest difference
+    between the two codes' finite-strain effects (Neo-Hookean / linear - 1, each code on its own mesh)."""
+    found = {}
+    for quantity in ("normal_force", "contact_radius", "base_pressure_spread"):
+        series = [r for r in rows if r["problem"] == "bump_press" and r["quantity"] == quantity and r["resolved"]
+                  and np.isfinite(r["error_fem_neo_hooke_vs_neo_hooke"])]
+        if not series:
+            continue
+        worst = max(series, key=lambda r: abs(r["error_fem_neo_hooke_vs_neo_hooke"]))
+        effect = max(series, key=lambda r: abs(r["finite_strain_effect_fem"] - r["finite_strain_effect_calculix"]))
+        found[quantity] = dict(
+            largest_error=worst["error_fem_neo_hooke_vs_neo_hooke"], at_depth_over_radius=worst["load"],
+            tolerance=worst["tolerance"], within=bool(abs(worst["error_fem_neo_hooke_vs_neo_hooke"])
+                                                      <= worst["tolerance"]),
+            effect_difference=effect["finite_strain_effect_fem"] - effect["finite_strain_effect_calculix"],
+            effect_fem=effect["finite_strain_effect_fem"], effect_calculix=effect["finite_strain_effect_calculix"],
+            effect_at_depth_over_radius=effect["load"], rows=len(series))
+    return found
+
+
+def _get(record, name):
+    """A field of a FEM row (dict) or a CalculiX record (dataclass)."""
+    return record[name] if isinstance(record, dict) else getattr(record, name)
 
 
 def run(out_dir, quick: bool = False, full: bool = False) -> dict:
@@ -120,6 +171,7 @@ def run(out_dir, quick: bool = False, full: bool = False) -> dict:
                    f"{INSTALL_HINT}")
         print(f"{NAME}: {message}")
         return {"skipped": message, "verdict": f"not run ({message})"}
+    stopped = {}                 # FEM paths that stopped before their end, by scene name
     mode = "full" if full else "quick" if quick else "default"
     settings = SETTINGS[mode]
     start = time.perf_counter()
@@ -139,10 +191,19 @@ def run(out_dir, quick: bool = False, full: bool = False) -> dict:
         futures = {key: pool.submit(job.run) for key, job in jobs.items()}
         fem_start = time.perf_counter()
         fem_sphere = _fem_sphere(sphere, settings["fem_layer"])
-        fem_paths = {path: _fem_bump(holding[path], path, values, settings["fem_bump"], HOLD_PRESS_FORCES)[0]
-                     for path, values in
-                     (("shear", np.linspace(0.1, 1.0, 10) * bump.shear_shift),
-                      ("twist", np.linspace(0.1, 1.0, 10) * bump.twist_angle))}
+        fem_neo = {"press": _fem_bump(bump, "shear", (), settings["fem_bump"], NEO_HOOKE_PRESS, hold=False,
+                                      law=NEO_HOOKE, stopped=stopped)[0]}
+        fem_paths, fem_peak = {}, {}
+        for path, values in (("shear", np.linspace(0.1, 1.0, 10) * bump.shear_shift),
+                             ("twist", np.linspace(0.1, 1.0, 10) * bump.twist_angle)):
+            for law in ("linear", NEO_HOOKE):
+                at_hold = _fem_bump(holding[path], path, values, settings["fem_bump"], HOLD_PRESS_FORCES, law=law,
+                                    stopped=stopped)[0]
+                (fem_paths if law == "linear" else fem_neo)[path] = at_hold
+                # the peak: held at the linear FEM's depth of 2.6 N, the path stretched to reach gross slip there
+                fem_peak[path, law] = _fem_bump(dataclasses.replace(holding[path], depth=peak_depth), path,
+                                                values * PEAK_PATH_SCALE[path], settings["fem_bump"], law=law,
+                                                stopped=stopped)[0]
         fem_seconds = time.perf_counter() - fem_start
         done, failed = {}, {}
         for key, future in futures.items():
@@ -153,7 +214,6 @@ def run(out_dir, quick: bool = False, full: bool = False) -> dict:
                 failed[f"{key[0]}_{key[1]}"] = next((line.strip() for line in lines if "*ERROR" in line), lines[-1])
     calculix = {key: records for key, (records, _) in done.items()}
     calculix_seconds = {f"{key[0]}_{key[1]}": seconds for key, (_, seconds) in done.items()}
-    have = lambda problem: (problem, "calculix_linear") in calculix     # the Neo-Hookean run may have failed
 
     def by_model(problem, pick=lambda records: records):
         return {name: pick(calculix[problem, name]) for name in laws if (problem, name) in calculix}
@@ -161,32 +221,48 @@ def run(out_dir, quick: bool = False, full: bool = False) -> dict:
     rows = press_rows("sphere_press", sphere.sphere_radius, fem_sphere, by_model("sphere"), settings["fem_layer"])
     fem_paths["press"] = fem_press
     fem_press_path = [(r["depth"], r["normal_force"], r["contact_radius"], r["base_spread"]) for r in fem_press]
-    rows += press_rows("bump_press", bump.bump_radius, fem_press_path, by_model("press"), settings["fem_bump"])
-    fem_held = lambda path: [r for r in fem_paths[path] if r["load_kind"] == "press"][-1:] + \
-        [r for r in fem_paths[path] if r["load_kind"] == path]
-    held = lambda records, kind: [[r for r in records if r.load_kind == "press"][-1]] + \
-        [r for r in records if r.load_kind == kind]
-    if have("shear"):
-        rows += shear_rows(fem_held("shear"), by_model("shear", lambda r: held(r, "shear")), bump.friction_coefficient)
-    if have("twist"):
-        rows += twist_rows(fem_held("twist"), by_model("twist", lambda r: held(r, "twist")), bump.friction_coefficient,
-                           fem_held("twist")[0]["contact_radius"])
+    neo_press_path = [(r["depth"], r["normal_force"], r["contact_radius"], r["base_spread"])
+                      for r in fem_neo["press"]]
+    rows += press_rows("bump_press", bump.bump_radius, fem_press_path, by_model("press"), settings["fem_bump"],
+                       fem_neo_hooke=neo_press_path)
+    def held(records, kind):
+        """The last press record (the held state), then the records of the ``kind`` path."""
+        return [[r for r in records if _get(r, "load_kind") == "press"][-1]] + \
+            [r for r in records if _get(r, "load_kind") == kind]
+
+    mu = bump.friction_coefficient
+    for path, make_rows in (("shear", shear_rows), ("twist", twist_rows)):
+        radius = () if path == "shear" else (held(fem_paths[path], path)[0]["contact_radius"],)
+        others = {**by_model(path, lambda r: held(r, path)), "fem_neo_hooke": held(fem_neo[path], path)}
+        rows += make_rows(held(fem_paths[path], path), others, mu, *radius, problem=f"bump_{path}")
+        radius = () if path == "shear" else (held(fem_peak[path, "linear"], path)[0]["contact_radius"],)
+        rows += make_rows(held(fem_peak[path, "linear"], path),
+                          {"fem_neo_hooke": held(fem_peak[path, NEO_HOOKE], path)}, mu, *radius,
+                          problem=f"bump_{path}_peak")
     for row in rows:
         row.update(mode=mode)
     write_csv_atomic(out_dir / f"{NAME}.csv", rows)
     found = envelope(rows)
-    hold_width = fem_held("shear")[0]["contact_radius"] / bump.bump_radius
+    # shear and twist against the FEM's own finite-strain gel (CalculiX's diverges there), at the hold and the peak
+    found_own = envelope([r for r in rows if r["problem"].startswith(("bump_shear", "bump_twist"))],
+                         reference=NEO_HOOKE_REFERENCE)
+    validation = _neo_hooke_validation(rows)
+    hold_width = held(fem_paths["shear"], "shear")[0]["contact_radius"] / bump.bump_radius
     unmeasured = "; ".join(f"CalculiX Neo-Hookean {key.split('_')[0]} failed: {message}"
                            for key, message in failed.items() if key.endswith("neo_hooke"))
-    bounds = envelope_bounds(found, hold_width, f"finite-strain {mode}, {ccx_version()}", unmeasured)
+    peak_width = held(fem_peak["shear", "linear"], "shear")[0]["contact_radius"] / bump.bump_radius
+    bounds = envelope_bounds({key: item for key, item in found.items() if item["holds_to"] is not None}, hold_width,
+                             f"finite-strain {mode}, {ccx_version()}", unmeasured, found_own, peak_width)
     shipped = {(b.quantity, b.load): (b.contact_width, b.load_ratio) for b in SMALL_STRAIN_ENVELOPE}
     differs = [b.describe() for b in bounds if shipped.get((b.quantity, b.load)) != (b.contact_width, b.load_ratio)]
     wall = time.perf_counter() - start
     stored = [dict(vars(b), load_ratio=None if np.isinf(b.load_ratio) else b.load_ratio) for b in bounds]   # no inf
     write_json_atomic(out_dir / f"{NAME}.envelope.json",
-                      dict(envelope=found, bounds=stored, settings=settings, ccx=ccx_version(), bump_depth=bump.depth,
-                           peak_depth=peak_depth, hold_bump_force=HOLD_BUMP_FORCE))
-    save_figure(plot(rows, fem_sphere, calculix, fem_paths, sphere, bump, found, wall), out_dir, NAME)
+                      dict(envelope=found, envelope_against_fem_neo_hooke=found_own,
+                           fem_neo_hooke_validation=validation, fem_stopped=stopped, bounds=stored,
+                           settings=settings, ccx=ccx_version(), bump_depth=bump.depth, peak_depth=peak_depth,
+                           hold_bump_force=HOLD_BUMP_FORCE))
+    save_figure(plot(rows, fem_sphere, calculix, fem_paths, fem_neo, sphere, bump, wall), out_dir, NAME)
     at_peak = [r for r in rows if r["problem"] != "sphere_press" and r.get("resolved", True)
                and np.isfinite(r["judged_error"])]
     worst = max(at_peak, key=lambda r: abs(r["judged_error"]) / r["tolerance"])
@@ -194,7 +270,9 @@ def run(out_dir, quick: bool = False, full: bool = False) -> dict:
     return {"max_error": abs(worst["error_fem_vs_neo_hooke"]),
             "error_meaning": f"largest |linear FEM - Neo-Hookean| on the bump (relative, or c/a), against its "
                              f"tolerance: {worst['quantity']} at {worst['load_name']} = {worst['load']:.3g}",
-            "envelope": found, "envelope_bounds": [b.describe() for b in bounds],
+            "envelope": found, "envelope_against_fem_neo_hooke": found_own,
+            "fem_neo_hooke_validation": validation, "envelope_bounds": [b.describe() for b in bounds],
             "differs_from_contact_envelope": differs, "outside_at_the_paper_loads": outside, "bump_depth": bump.depth,
-            "calculix_seconds": calculix_seconds, "calculix_failed": failed, "fem_seconds": fem_seconds,
+            "calculix_seconds": calculix_seconds, "calculix_failed": failed, "fem_stopped": stopped,
+            "fem_seconds": fem_seconds,
             "wall_time": wall, "mode": mode}

@@ -46,7 +46,7 @@ def edit(path, value):
     (("body", "shape"), "cube", r"body.shape='cube' is not one of"),
     (("mesh", "order"), 3, r"mesh.order=3 outside allowed range \[1, 2\]"),
     (("mesh", "size_contact"), "fine", r"mesh.size_contact='fine' \(a string\) is not a number \[mm\]"),
-    (("material", "G"), 1.0, r"material.G: unknown key; allowed: \['E', 'nu'\]"),
+    (("material", "G"), 1.0, r"material.G: unknown key; allowed: \['E', 'law', 'nu'\]"),
     (("colour",), "red", r"colour: unknown top-level key"),
     (("material",), None, r"scene is missing \[material\]"),
     (("load",), None, r"scene is missing \[\[load\]\]"),
