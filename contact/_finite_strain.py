@@ -51,7 +51,7 @@ class FiniteStrainGel:
     model: ElasticModel
     youngs_modulus: float
     poissons_ratio: float
-    iterations: int = 0               # Newton iterations, each one assembly and one sparse factorization
+    iterations: int = 0               # Newton steps, each one tangent assembly and one sparse factorization
 
     def __post_init__(self):
         if self.model.volumetric != "standard":
@@ -107,8 +107,8 @@ def solve_finite_strain_increment(gel: FiniteStrainGel, candidates: np.ndarray, 
     force_scale = max(abs(control.normal_force or 0.0), float(previous.normal_force.sum()))
 
     def at_points(u_free):
-        values = np.where(point_rows >= 0, u_free[np.maximum(point_rows, 0)], 0.0)
-        return values                                                 # (n, 3) [mm]
+        """The candidate points' displacement (n, 3) [mm], 0 where a dof is held."""
+        return np.where(point_rows >= 0, u_free[np.maximum(point_rows, 0)], 0.0)
 
     def contact_load(lam, tan):
         """Contact forces on the free dofs [N]: t on x, y and -lambda on z (the body presses the gel down)."""
@@ -148,7 +148,6 @@ def solve_finite_strain_increment(gel: FiniteStrainGel, candidates: np.ndarray, 
     current = evaluate(u, lam, tan, depth, shift, angle)
     for iteration in range(1, max_iterations + 1):
         history.append(current["norm"])
-        gel.iterations += 1
         u, lam, tan, depth, shift, angle = current["state"]
         lam_hat, trial = current["lam_hat"], current["trial"]
         if current["norm"] < tolerance and iteration > 1:
@@ -170,6 +169,7 @@ def solve_finite_strain_increment(gel: FiniteStrainGel, candidates: np.ndarray, 
         if contact.size == 0:
             raise ContactNotConverged("the body does not touch the gel (no point has a closed gap); increase the "
                                       "depth or the normal force", history)
+        gel.iterations += 1
         step = _newton_step(gel.tangent(u), current["equilibrium"], contact, lam, tan, lam_hat, trial,
                             current["gap"], current["slip"], r, mu, lever, point_rows, held_y, frictional, depth_free,
                             shift_free, angle_free, shift_components, control)

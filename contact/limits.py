@@ -160,8 +160,10 @@ def check_scene_limits(scene: Scene) -> list[str]:
     level = _level(strain, SMALL_STRAIN_WARN, SMALL_STRAIN_REFUSE)
     if level == 2:
         problems.append(f"the largest press would indent the gel about {depth:.3g} mm into its {thickness:g} mm "
-                        f"(d/H = {strain:.3g}, half-space estimate): past d/H = {SMALL_STRAIN_REFUSE} a linear, "
-                        f"small-strain gel means nothing; lower the press")
+                        f"(d/H = {strain:.3g}, half-space estimate): past d/H = {SMALL_STRAIN_REFUSE} "
+                        + ("a linear, small-strain gel means nothing" if small_strain else
+                           "the finite-strain gel is not validated (CalculiX's comparison reaches d/R = 0.39)")
+                        + "; lower the press")
     elif level == 1 and small_strain:
         notes.append(f"the largest press indents the gel about {depth:.3g} mm into its {thickness:g} mm (d/H = "
                      f"{strain:.2f} > {SMALL_STRAIN_WARN}): past small strain, the linear answer is less accurate")
@@ -196,10 +198,11 @@ def check_increment_limits(scene: Scene, depth: float, slid: float, contact_radi
     thickness = scene.gel.thickness_under_contact
     strain = depth / thickness
     level = _level(strain, SMALL_STRAIN_WARN, SMALL_STRAIN_REFUSE)
-    if level == 2:
-        raise PhysicalLimitError(f"increment {number}: the body is {depth:.3g} mm into the {thickness:g} mm gel "
-                                 f"(d/H = {strain:.3g} >= {SMALL_STRAIN_REFUSE}): past small strain, refused", result)
     small_strain = scene.material.law == MaterialLaw.LINEAR
+    if level == 2:
+        beyond = "past small strain" if small_strain else "past what the finite-strain gel is validated for"
+        raise PhysicalLimitError(f"increment {number}: the body is {depth:.3g} mm into the {thickness:g} mm gel "
+                                 f"(d/H = {strain:.3g} >= {SMALL_STRAIN_REFUSE}): {beyond}, refused", result)
     if level == 1 and "strain" not in warned and small_strain:
         warned.add("strain")
         warnings.warn(f"increment {number}: depth {depth:.3g} mm of the {thickness:g} mm gel (d/H = {strain:.2f} > "

@@ -194,9 +194,9 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
     seconds_before = compliance.seconds
     positions = model.top.positions[candidates]
     gap0 = scene.body.initial_gap(positions[:, :2]) - positions[:, 2]       # the gel's top point is at z = 0
-    def lever_at(xy):
-        """Rigid twist motion per radian at points xy (n, 2): (-(y - y_c), x - x_c) [mm/rad]."""
-        return np.column_stack([-(xy[:, 1] - scene.body.center[1]), xy[:, 0] - scene.body.center[0]])
+    def lever_at(xy, center=scene.body.center):
+        """Rigid twist motion per radian at points xy (n, 2) about ``center``: (-(y - y_c), x - x_c) [mm/rad]."""
+        return np.column_stack([-(xy[:, 1] - center[1]), xy[:, 0] - center[0]])
 
     lever = lever_at(positions[:, :2])
     areas = model.top.areas[candidates]
@@ -232,8 +232,9 @@ def solve_scene(scene: Scene, prepared: Prepared | None = None, progress: bool =
         for kind, control, friction_on in controls:
             step_start = time.perf_counter()
             control = scaled(control, 1.0 / multiplicity)
-            if finite_strain is not None:          # the plate turns the points where they are, not where they were
-                lever = lever_at(positions[:, :2] + state.displacement[:, :2])
+            if finite_strain is not None:          # the plate turns the points where they are, about where it is
+                lever = lever_at(positions[:, :2] + state.displacement[:, :2],
+                                 np.asarray(scene.body.center) + state.shift)
             try:
                 check_feasible(control, state, scene.contact.friction_coefficient, lever)
             except ValueError as error:

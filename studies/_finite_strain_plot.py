@@ -32,7 +32,7 @@ def _errors(axis, rows, problems, title, xlabel, error="judged_error", reference
     """Each quantity's ``error`` over its tolerance against the load; ``problems``: (problem, line style, note)."""
     top = 0.0
     if not any(r["problem"] == problem and np.isfinite(r[error]) for r in rows for problem, _, _ in problems):
-        axis.text(0.5, 0.5, "no Neo-Hookean result (see the summary's calculix_failed)", ha="center",
+        axis.text(0.5, 0.5, "no Neo-Hookean result (see the summary's calculix_failed and fem_stopped)", ha="center",
                   transform=axis.transAxes, fontsize=8)
     for problem, line, note in problems:
         for quantity in dict.fromkeys(r["quantity"] for r in rows if r["problem"] == problem):
