@@ -174,7 +174,7 @@ def envelope(rows: list[dict], reference: str = "calculix_neo_hooke") -> dict:
             worst = max(series, key=lambda r: abs(r[error]))
             found[f"{key[0]}:{key[1]}"] = dict(
                 load_name=series[0]["load_name"], holds_from=None, holds_to=None,
-                holds_to_contact_radius_over_radius=None, tested_to=series[-1]["load"],
+                holds_to_contact_radius_over_radius=None, tested_from=series[0]["load"], tested_to=series[-1]["load"],
                 tolerance=series[0]["tolerance"], largest_error=worst[error], at_load=worst["load"],
                 first_miss=series[0]["load"], first_miss_error=series[0][error], reference=reference)
             continue
@@ -186,7 +186,7 @@ def envelope(rows: list[dict], reference: str = "calculix_neo_hooke") -> dict:
         found[f"{key[0]}:{key[1]}"] = dict(
             load_name=series[0]["load_name"], holds_from=series[start]["load"], holds_to=series[held]["load"],
             holds_to_contact_radius_over_radius=series[held].get("contact_radius_over_radius"),
-            tested_to=series[-1]["load"], tolerance=series[0]["tolerance"],
+            tested_from=series[0]["load"], tested_to=series[-1]["load"], tolerance=series[0]["tolerance"],
             largest_error=worst[error], at_load=worst["load"],
             first_miss=None if held + 1 == len(series) else series[held + 1]["load"],
             first_miss_error=None if held + 1 == len(series) else series[held + 1][error], reference=reference)
@@ -232,7 +232,10 @@ def envelope_bounds(found: dict, hold_contact_width: float, measured: str, unmea
         if hold is None:                             # no Neo-Hookean run: only what the press says
             tightest[quantity] = EnvelopeBound(quantity, load, press, math.inf, unmeasured, assumed=True)
             continue
-        ratio = min(item["holds_to"] or 0.0 for item in (hold, peak) if item is not None)
+        # a shear or twist miss below the first load ratio within is not the mesh's (the contact is the held one):
+        # such a quantity holds nowhere
+        ratio = min(item["holds_to"] if item["holds_to"] is not None and item["holds_from"] == item["tested_from"]
+                    else 0.0 for item in (hold, peak) if item is not None)
         width = peak_contact_width if peak is not None and peak_contact_width else hold_contact_width
         tightest[quantity] = EnvelopeBound(quantity, load, round(width, 2), round(ratio, 2),
                                            f"bump_{load} and its peak against the project's Neo-Hookean gel "

@@ -32,7 +32,10 @@ def test_a_quantity_measured_only_against_the_fems_own_gel_is_bounded_by_its_tig
     hold = _rows("bump_shear", "stick_ratio", (0.3, 0.6), (0.9, 0.7), (0.91, 0.8), relative=False)
     peak = _rows("bump_shear_peak", "stick_ratio", (0.3, 0.6), (0.9, 0.7), (0.93, 0.72), relative=False)
     cop = _rows("bump_shear", "base_cop_shift", (0.3,), (1.0,), (1.3,))
-    own = envelope(hold + peak + cop, reference="fem_neo_hooke")
+    # off at the first ratio, within after: the held contact is resolved, so the early miss is not excused
+    late = _rows("bump_shear", "tangential_compliance", (0.3, 0.6), (1.0, 1.0), (1.2, 1.01))
+    own = envelope(hold + peak + cop + late, reference="fem_neo_hooke")
+    assert own["bump_shear:tangential_compliance"]["holds_from"] == 0.6
     bounds = {b.quantity: b for b in envelope_bounds({}, 0.52, "test run", "not run", own, 0.63)}
     # the hold holds c/a to 0.3 (0.1 off at 0.6), the peak to 0.6: the tighter ratio, at the peak's width
     assert (bounds["stick_ratio"].contact_width, bounds["stick_ratio"].load_ratio) == (0.63, 0.3)
@@ -40,5 +43,6 @@ def test_a_quantity_measured_only_against_the_fems_own_gel_is_bounded_by_its_tig
     # outside at every ratio measured: a bound at ratio 0 at the hold's width (no peak run)
     assert (bounds["base_cop_shift"].contact_width, bounds["base_cop_shift"].load_ratio) == (0.52, 0.0)
     assert "at any Q/(mu P) measured" in bounds["base_cop_shift"].describe()
+    assert bounds["tangential_compliance"].load_ratio == 0.0
     # a quantity no Neo-Hookean gel measured stays assumed, at the press's width (none here: 0)
     assert bounds["torsional_compliance"].assumed and math.isinf(bounds["torsional_compliance"].load_ratio)
