@@ -27,10 +27,10 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from contact._newton import (OPEN, SLIP, STAGNATION_FACTOR, STAGNATION_ITERATIONS, STICK, ON_CONE, BodyControl,
-                             ContactNotConverged, ContactState, _project_disc)
+from contact._newton import (ON_CONE, STAGNATION_FACTOR, STAGNATION_ITERATIONS, BodyControl, ContactNotConverged,
+                             ContactState, _project_disc, point_status)
 from fem.elasticity import ElasticModel
-from fem.hyperelastic import InvertedElement, internal_force, tangent_stiffness
+from fem.hyperelastic import InvertedElement, displacement_gradient, internal_force, tangent_stiffness
 from fem.linear_solver import solve_sparse
 
 __all__ = ["FiniteStrainGel", "solve_finite_strain_increment"]
@@ -57,21 +57,20 @@ class FiniteStrainGel:
         if self.model.volumetric != "standard":
             raise ValueError(f"mesh.volumetric={self.model.volumetric!r}: the finite-strain gel needs 'standard'")
 
-    def internal(self, u_free: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """f_int on the free dofs and on the fixed dofs [N]; ContactNotConverged where an element turns inside out
-        (contact._controls then bisects the increment)."""
+    def internal(self, u_free: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """f_int on the free dofs and on the fixed dofs [N], and grad u (for ``tangent``); ContactNotConverged where
+        an element turns inside out (contact._controls then bisects the increment)."""
         model = self.model
         try:
-            force, _ = internal_force(model, model.full_vector(u_free), self.youngs_modulus, self.poissons_ratio)
+            gradient = displacement_gradient(model, model.full_vector(u_free))
         except InvertedElement as error:
             raise ContactNotConverged(str(error), []) from None
-        return force[model.free_dofs], force[model.fixed_dofs]
+        force = internal_force(model, gradient, self.youngs_modulus, self.poissons_ratio)
+        return force[model.free_dofs], force[model.fixed_dofs], gradient
 
-    def tangent(self, u_free: np.ndarray) -> sp.coo_matrix:
-        """K_T between the free dofs [N/mm] (COO)."""
-        model = self.model
-        return tangent_stiffness(model, model.full_vector(u_free), self.youngs_modulus, self.poissons_ratio,
-                                 model.free_dofs)
+    def tangent(self, gradient: np.ndarray) -> sp.coo_matrix:
+        """K_T between the free dofs [N/mm] (COO) at the displacement gradient ``internal`` returned."""
+        return tangent_stiffness(self.model, gradient, self.youngs_modulus, self.poissons_ratio, self.model.free_dofs)
 
 
 def solve_finite_strain_increment(gel: FiniteStrainGel, candidates: np.ndarray, gap0: np.ndarray, lever: np.ndarray,
@@ -120,7 +119,7 @@ def solve_finite_strain_increment(gel: FiniteStrainGel, candidates: np.ndarray, 
 
     def evaluate(u, lam, tan, depth, shift, angle) -> dict:
         """The residuals of an iterate (open points: lambda = 0 and t = 0) and its norm relative to the load."""
-        internal, fixed_force = gel.internal(u)
+        internal, fixed_force, gradient = gel.internal(u)
         displacement = at_points(u)
         gap = gap0 - depth - displacement[:, 2]
         slip = displacement[:, :2] - omega - shift - angle * lever
@@ -141,8 +140,8 @@ def solve_finite_strain_increment(gel: FiniteStrainGel, candidates: np.ndarray, 
         norm = float(np.linalg.norm(np.concatenate([equilibrium, lam - np.maximum(0.0, lam_hat), tangential.ravel(),
                                                     np.asarray(body, float)]))) / scale
         return dict(state=(u, lam, tan, depth, shift, angle), norm=norm, equilibrium=equilibrium, gap=gap,
-                    slip=slip, lam_hat=lam_hat, trial=trial, radius=radius, displacement=displacement,
-                    fixed_force=fixed_force)
+                    slip=slip, lam_hat=lam_hat, trial=trial, displacement=displacement,
+                    fixed_force=fixed_force, gradient=gradient)
 
     history: list[float] = []
     current = evaluate(u, lam, tan, depth, shift, angle)
@@ -151,11 +150,7 @@ def solve_finite_strain_increment(gel: FiniteStrainGel, candidates: np.ndarray, 
         u, lam, tan, depth, shift, angle = current["state"]
         lam_hat, trial = current["lam_hat"], current["trial"]
         if current["norm"] < tolerance and iteration > 1:
-            status = np.full(n, OPEN)
-            status[lam_hat > 0] = SLIP if mu == 0.0 else STICK
-            if frictional:
-                sliding = np.linalg.norm(trial, axis=1) > current["radius"] * (1.0 + 1e-8)
-                status[(lam_hat > 0) & (sliding | (mu == 0.0))] = SLIP
+            status = point_status(lam_hat, trial if frictional else None, mu)
             return (ContactState(lam.copy(), tan.copy(), current["displacement"], depth,
                                  np.asarray(shift, float).copy(), angle, status, u.copy(), current["fixed_force"]),
                     iteration - 1, history)
@@ -170,7 +165,7 @@ def solve_finite_strain_increment(gel: FiniteStrainGel, candidates: np.ndarray, 
             raise ContactNotConverged("the body does not touch the gel (no point has a closed gap); increase the "
                                       "depth or the normal force", history)
         gel.iterations += 1
-        step = _newton_step(gel.tangent(u), current["equilibrium"], contact, lam, tan, lam_hat, trial,
+        step = _newton_step(gel.tangent(current["gradient"]), current["equilibrium"], contact, lam, tan, lam_hat, trial,
                             current["gap"], current["slip"], r, mu, lever, point_rows, held_y, frictional, depth_free,
                             shift_free, angle_free, shift_components, control)
         target_lam, target_tan = np.zeros(n), np.zeros((n, 2))       # open points' forces go to zero

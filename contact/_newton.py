@@ -338,19 +338,26 @@ def _unknowns(contact, n_comp, lam, tan, slipping, depth_free, depth, shift_free
     return np.concatenate(keys), np.concatenate(states), np.concatenate(values)
 
 
-def _finish(compliance, lam, tan, u, depth, shift, angle, gap, slip_inc, r, mu) -> ContactState:
-    """Package the converged iterate; classify points as open, stick or slip from the Alart-Curnier branches."""
-    n = lam.size
-    lam_hat = lam - r * gap
-    status = np.full(n, OPEN)
+def point_status(lam_hat: np.ndarray, trial: np.ndarray | None, mu: float) -> np.ndarray:
+    """OPEN / STICK / SLIP (n,) of converged points from their Alart-Curnier branches: lam_hat = lambda - r g, the
+    trial traction t - r w (None without tangential unknowns)."""
+    status = np.full(lam_hat.size, OPEN)
     in_contact = lam_hat > 0
     # normal-only problems: frictionless points slide freely (SLIP); a press-only path with mu > 0 has no tangential
     # unknowns and its points are reported as STICK (the small Spence pre-slip is what that omission leaves out)
     status[in_contact] = SLIP if mu == 0.0 else STICK
-    if slip_inc is not None:
-        z_norm = np.linalg.norm(tan - r[:, None] * slip_inc, axis=1)
+    if trial is not None:
         # a point slips when its trial traction leaves the cone: |t - r w| > mu lambda (w != 0 on the limit)
+        z_norm = np.linalg.norm(trial, axis=1)
         status[in_contact & ((z_norm > mu * lam_hat * (1.0 + 1e-8)) | (mu == 0.0))] = SLIP
+    return status
+
+
+def _finish(compliance, lam, tan, u, depth, shift, angle, gap, slip_inc, r, mu) -> ContactState:
+    """Package the converged iterate; classify points as open, stick or slip from the Alart-Curnier branches."""
+    n = lam.size
+    lam_hat = lam - r * gap
+    status = point_status(lam_hat, None if slip_inc is None else tan - r[:, None] * slip_inc, mu)
     displacement = np.zeros((n, 3))
     displacement[:, list(compliance.components)] = u
     return ContactState(lam.copy(), tan.copy(), displacement, depth, np.asarray(shift, float).copy(), angle, status)

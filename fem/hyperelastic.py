@@ -28,8 +28,8 @@ from skfem.helpers import ddot, det, grad, identity, inv, transpose
 
 from fem.elasticity import ElasticModel, lame_parameters
 
-__all__ = ["InvertedElement", "neo_hookean_stress", "tangent_modulus", "internal_force", "tangent_stiffness",
-           "bulk_modulus"]
+__all__ = ["InvertedElement", "neo_hookean_stress", "tangent_modulus", "displacement_gradient", "internal_force",
+           "tangent_stiffness", "bulk_modulus"]
 
 
 def bulk_modulus(youngs_modulus: float, poissons_ratio: float) -> float:
@@ -109,25 +109,30 @@ class InvertedElement(ValueError):
         self.smallest = smallest
 
 
-def internal_force(model: ElasticModel, displacement: np.ndarray, youngs_modulus: float,
-                   poissons_ratio: float) -> tuple[np.ndarray, float]:
-    """Nodal internal forces f_int(u) [N] of the Neo-Hookean gel on every dof for a displacement on every dof [mm],
-    and the smallest det F over the quadrature points; InvertedElement where it is <= 0."""
-    shear_modulus = lame_parameters(youngs_modulus, poissons_ratio)[1]
+def displacement_gradient(model: ElasticModel, displacement: np.ndarray) -> np.ndarray:
+    """grad u (3, 3, elements, points) at the quadrature points for a displacement on every dof [mm]; InvertedElement
+    where det F <= 0 anywhere. ``internal_force`` and ``tangent_stiffness`` take it, so that a Newton iteration
+    interpolates its iterate once."""
     gradient = model.basis.interpolate(displacement).grad
-    jacobian = det(identity(gradient) + gradient)
-    if jacobian.min() <= 0.0:
-        raise InvertedElement(float(jacobian.min()))
+    smallest = float(det(identity(gradient) + gradient).min())
+    if smallest <= 0.0:
+        raise InvertedElement(smallest)
+    return gradient
+
+
+def internal_force(model: ElasticModel, gradient: np.ndarray, youngs_modulus: float,
+                   poissons_ratio: float) -> np.ndarray:
+    """Nodal internal forces f_int(u) [N] of the Neo-Hookean gel on every dof, for u's ``displacement_gradient``."""
+    shear_modulus = lame_parameters(youngs_modulus, poissons_ratio)[1]
     # the stress once per quadrature point, not once per test function as a form evaluating it would
     stress = neo_hookean_stress(gradient, shear_modulus, bulk_modulus(youngs_modulus, poissons_ratio))
-    return asm(_internal_work, model.basis, stress=stress), float(jacobian.min())
+    return asm(_internal_work, model.basis, stress=stress)
 
 
-def tangent_stiffness(model: ElasticModel, displacement: np.ndarray, youngs_modulus: float, poissons_ratio: float,
+def tangent_stiffness(model: ElasticModel, gradient: np.ndarray, youngs_modulus: float, poissons_ratio: float,
                       dofs: np.ndarray | None = None) -> sp.coo_matrix:
-    """The tangent stiffness df_int/du [N/mm] between the dofs ``dofs`` (default all; COO, duplicates not summed) for a
-    displacement on every dof [mm]."""
+    """The tangent stiffness df_int/du [N/mm] between the dofs ``dofs`` (default all; COO, duplicates not summed), for
+    u's ``displacement_gradient``."""
     shear_modulus = lame_parameters(youngs_modulus, poissons_ratio)[1]
-    gradient = model.basis.interpolate(displacement).grad
     modulus = tangent_modulus(gradient, shear_modulus, bulk_modulus(youngs_modulus, poissons_ratio))
     return _assemble_tangent(model.basis, modulus, np.arange(model.n_dofs) if dofs is None else np.asarray(dofs))
