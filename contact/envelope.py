@@ -65,26 +65,29 @@ class EnvelopeBound:
 
 
 _RUN = "python -m studies finite-strain --quick, CalculiX 2.20"
+_GETFEM = "bump_{0} and its peak against GetFEM's Neo-Hookean gel (contact.getfem), finite-strain quick, CalculiX 2.20"
 _OWN = ("bump_{0} and its peak against the project's Neo-Hookean gel (contact._finite_strain, validated on the "
         "press), finite-strain quick, CalculiX 2.20")
 # measured by the run named above (its summary's ``differs_from_contact_envelope`` is empty when this table matches
 # it): the bump's normal force at equal depth leaves 3 % between a/R = 0.52 (1.5 N, -3.0 %) and 0.58 (2.0 N, -6.3 %;
 # -9.6 % at 2.6 N, a/R = 0.63), the layer's holds to the largest press (+1.5 % at a/R = 0.64); the bump's contact
 # radius leaves 5 % at a/R = 0.58 (+5.1 %); the spread of the base pressure stays within 1.2 % to a/R = 0.63.
-# Shear and twist against the project's own Neo-Hookean gel (CalculiX's diverges when friction comes on), held at
-# the depths of 1.5 N (a/R = 0.52) and 2.6 N (0.63), the tighter of the two: the tangential compliance to Q/(mu P) =
-# 0.51 (the peak's path stops there; 0.77 at 1.5 N), the stick ratio to 0.36 (0.68 at 1.5 N); the base pressure's
-# centre is 21-34 % short and the torsional compliance 21-37 % long at every load ratio measured (the normal force's
-# moment on the sheared contact, the bulged contact's lever arms: docs/finite_strain.md, sec. 2.4); the stick ratio
-# under twist holds to T/(mu P a) = 0.42 (0.47, the last measured, at 1.5 N)
+# Shear and twist against GetFEM's Neo-Hookean gel on the FEM's mesh (CalculiX's diverges when friction comes on;
+# the project's own Neo-Hookean gel meets GetFEM's within 1.1 % in tangential compliance, 0.4 % in the base
+# pressure's centre and 1.2 % in torsional compliance short of gross slip), held at the depths of 1.5 N (a/R = 0.52)
+# and 2.6 N (0.63), the tighter of the two: the tangential compliance to Q/(mu P) = 0.51 (-7.9 % at 0.64; 0.77 at
+# 1.5 N); the base pressure's centre is 22-34 % short and the torsional compliance 21-36 % long at every load ratio
+# measured (the normal force's moment on the sheared contact, the bulged contact's lever arms: docs/finite_strain.md,
+# sec. 2.5). The stick ratios against the project's own gel (GetFEM's nodal reading sits 0.04-0.09 below it): to
+# Q/(mu P) = 0.36 (0.68 at 1.5 N), under twist to T/(mu P a) = 0.42 (0.52, the last measured, at 1.5 N)
 SMALL_STRAIN_ENVELOPE: tuple[EnvelopeBound, ...] = (
     EnvelopeBound("normal_force", "press", 0.52, measured=f"bump_press, {_RUN}"),
     EnvelopeBound("contact_radius", "press", 0.52, measured=f"bump_press, {_RUN}"),
     EnvelopeBound("base_pressure_spread", "press", 0.63, measured=f"bump_press, {_RUN}"),
-    EnvelopeBound("tangential_compliance", "shear", 0.63, 0.51, measured=_OWN.format("shear")),
+    EnvelopeBound("tangential_compliance", "shear", 0.63, 0.51, measured=_GETFEM.format("shear")),
     EnvelopeBound("stick_ratio", "shear", 0.63, 0.36, measured=_OWN.format("shear")),
-    EnvelopeBound("base_cop_shift", "shear", 0.63, 0.0, measured=_OWN.format("shear")),
-    EnvelopeBound("torsional_compliance", "twist", 0.63, 0.0, measured=_OWN.format("twist")),
+    EnvelopeBound("base_cop_shift", "shear", 0.63, 0.0, measured=_GETFEM.format("shear")),
+    EnvelopeBound("torsional_compliance", "twist", 0.63, 0.0, measured=_GETFEM.format("twist")),
     EnvelopeBound("stick_ratio_twist", "twist", 0.63, 0.42, measured=_OWN.format("twist")),
 )
 

@@ -1,5 +1,5 @@
-"""The finite-strain study's reading of its rows (studies._finite_strain_compare): the envelope against either
-Neo-Hookean reference, and the bounds a quantity gets when only the project's own finite-strain gel measured it."""
+"""The finite-strain study's reading of its rows (studies._finite_strain_compare): the envelope against each
+Neo-Hookean reference, and the bounds a quantity gets from GetFEM's gel or, without it, the project's own."""
 
 import math
 
@@ -46,3 +46,45 @@ def test_a_quantity_measured_only_against_the_fems_own_gel_is_bounded_by_its_tig
     assert bounds["tangential_compliance"].load_ratio == 0.0
     # a quantity no Neo-Hookean gel measured stays assumed, at the press's width (none here: 0)
     assert bounds["torsional_compliance"].assumed and math.isinf(bounds["torsional_compliance"].load_ratio)
+
+
+def test_getfems_gel_bounds_a_quantity_before_the_fems_own_but_not_the_stick_ratios():
+    def rows(problem, quantity, loads, values, relative=True):
+        return [_row(problem, quantity, "load_ratio", load, dict(zip(("fem_linear", "fem_neo_hooke", "getfem_linear",
+                                                                       "getfem_neo_hooke"), v)), relative, {})
+                for load, v in zip(loads, values)]
+
+    # the linear FEM within 5 % of the FEM's own gel at both ratios, outside GetFEM's at 0.6 (-9 %)
+    compliance = rows("bump_shear", "tangential_compliance", (0.3, 0.6),
+                      ((1.0, 1.01, 1.0, 1.02), (1.0, 1.02, 1.0, 1.1)))
+    # GetFEM's stick ratio reads low: it is reported, not judged, and the FEM's own gel bounds the quantity
+    stick = rows("bump_shear", "stick_ratio", (0.3, 0.6), ((0.9, 0.91, 0.8, 0.81), (0.7, 0.8, 0.6, 0.62)),
+                 relative=False)
+    assert math.isnan(stick[0]["judged_error_getfem"])
+    assert stick[0]["error_fem_neo_hooke_vs_getfem_neo_hooke"] == pytest.approx(0.1)
+    own = envelope(compliance + stick, reference="fem_neo_hooke")
+    independent = envelope(compliance + stick, reference="getfem_neo_hooke")
+    assert "bump_shear:stick_ratio" not in independent
+    bounds = {b.quantity: b for b in envelope_bounds({}, 0.52, "test run", "not run", own, None, independent)}
+    assert bounds["tangential_compliance"].load_ratio == 0.3 and "GetFEM" in bounds["tangential_compliance"].measured
+    assert bounds["stick_ratio"].load_ratio == 0.3 and "project's" in bounds["stick_ratio"].measured
+    # without GetFEM's envelope the FEM's own gel bounds the compliance too
+    fallback = {b.quantity: b for b in envelope_bounds({}, 0.52, "test run", "not run", own, None)}
+    assert fallback["tangential_compliance"].load_ratio == 0.6
+    assert "project's Neo-Hookean gel" in fallback["tangential_compliance"].measured
+
+
+def test_a_model_that_stops_early_leaves_nan_past_its_last_ratio_not_fewer_rows():
+    from studies._finite_strain_compare import shear_rows
+
+    def path(ratios, cop_gain):       # the pressed state, then increments at the load ratios Q/(mu P), P = 1 N
+        return [dict(normal_force=1.0, tangential_force=0.0, shift=0.0, stick_ratio=1.0, base_cop_x=0.0)] + [
+            dict(normal_force=1.0, tangential_force=q, shift=1.8 * q, stick_ratio=1.0 - q, base_cop_x=cop_gain * q)
+            for q in ratios]
+
+    rows = shear_rows(path((0.2, 0.4, 0.6, 0.8), 5.0), {"fem_neo_hooke": path((0.2, 0.4, 0.6, 0.8), 6.0),
+                                                        "getfem_neo_hooke": path((0.2, 0.4), 6.0)}, 1.0)
+    cop = [r for r in rows if r["quantity"] == "base_cop_shift"]
+    assert [r["load"] for r in cop] == [0.2, 0.4, 0.6, 0.8]
+    assert [math.isnan(r["getfem_neo_hooke"]) for r in cop] == [False, False, True, True]
+    assert cop[-1]["error_fem_vs_fem_neo_hooke"] == pytest.approx(5.0 / 6.0 - 1.0)

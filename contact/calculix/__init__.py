@@ -10,8 +10,8 @@ scenes of the project's linear solver are in ``_scenes``. Runs are kept on disk 
 """
 
 from contact.calculix._cases import (SLIP_TOLERANCE, BumpRecord, BumpSetup, CalculixJob, PressRecord, SpherePress,
-                                     bump_job, bump_path, bump_press_job, sphere_press,
-                                     sphere_press_job)
+                                     bump_job, bump_path, bump_press_job, contact_state,
+                                     sphere_press, sphere_press_job)
 from contact.calculix._deck import GelLaw
 from contact.calculix._files import DatTable, FrdStep, read_dat, read_frd
 from contact.calculix._run import (INSTALL_HINT, CalculixFailed, CalculixUnavailable, ccx_executable, ccx_version,
@@ -19,7 +19,7 @@ from contact.calculix._run import (INSTALL_HINT, CalculixFailed, CalculixUnavail
 from contact.calculix._scenes import bump_scene, sphere_press_scene
 
 __all__ = ["GelLaw", "SpherePress", "PressRecord", "BumpSetup", "BumpRecord", "CalculixJob", "sphere_press_job",
-           "sphere_press", "bump_job", "bump_path", "bump_press_job", "SLIP_TOLERANCE", "sphere_press_scene",
-           "bump_scene",
+           "sphere_press", "bump_job", "bump_path", "bump_press_job", "SLIP_TOLERANCE", "contact_state",
+           "sphere_press_scene", "bump_scene",
            "CalculixUnavailable", "CalculixFailed", "ccx_executable", "ccx_version", "run_deck", "INSTALL_HINT",
            "DatTable", "FrdStep", "read_dat", "read_frd"]

@@ -18,7 +18,7 @@ from contact.calculix._run import CalculixFailed, run_deck, run_seconds
 from fem.validation import check_all, check_bool, check_integer, check_positive, check_range, parse_choice
 
 __all__ = ["CalculixJob", "SpherePress", "PressRecord", "sphere_press_job", "sphere_press", "BumpSetup", "BumpRecord",
-           "bump_job", "bump_path", "bump_press_job", "SLIP_TOLERANCE"]
+           "bump_job", "bump_path", "bump_press_job", "SLIP_TOLERANCE", "contact_state"]
 
 # mm: a contact node sticks in an increment when it moved with the plate to within this (5 x the elastic slip
 # tau / STICK_SLOPE <= 1e-3 mm a stuck point has). The nodal stresses CalculiX writes for mortar contact are smoothed
@@ -234,7 +234,7 @@ def _whole_surface(mesh, current, fields):
     return np.vstack([xy, xy[~on_plane] * flip]), np.vstack([tri, image[tri][:, ::-1]]), [mirror(f) for f in fields]
 
 
-def _contact_state(xy, triangles, pressure, shear, stuck, friction_coefficient):
+def contact_state(xy, triangles, pressure, shear, stuck, friction_coefficient):
     """Recovered contact radius and stick ratio (``contact.recovery`` with the points' status) and the nodal stick
     ratio, from nodal pressures, shear stresses and whether each point moved with the plate."""
     from contact._newton import OPEN, SLIP, STICK
@@ -309,7 +309,7 @@ def bump_job(setup: BumpSetup, law: GelLaw | str, path: str) -> CalculixJob:
             before = (current, shift, angle)
             surface_xy, triangles, (surface_pressure, surface_shear, surface_stuck) = _whole_surface(
                 mesh, current, (pressure, shear, stuck))
-            radius, stick, nodal = _contact_state(surface_xy, triangles, surface_pressure, surface_shear,
+            radius, stick, nodal = contact_state(surface_xy, triangles, surface_pressure, surface_shear,
                                                   surface_stuck, setup.friction_coefficient)
             records.append(BumpRecord(
                 load_kind="press" if key < 1.0 + 1e-9 else path, normal_force=float(factor * base[:, 3].sum()),
