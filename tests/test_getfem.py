@@ -11,6 +11,7 @@ from contact.calculix import BumpSetup, bump_scene
 from contact.envelope import SMALL_STRAIN_TOLERANCE
 from contact.getfem import GetfemUnavailable, bump_job, getfem_python
 from contact.limits import PhysicalLimitWarning
+from contact.scene import GelSpec
 
 needs_getfem = pytest.mark.skipif(getfem_python() is None, reason="GetFEM's Python interface not installed "
                                                                   "(apt-get install python3-getfem)")
@@ -32,6 +33,18 @@ def test_getfem_runs_only_a_held_bump_under_a_plate_and_says_how_to_install_it(m
 
     with pytest.raises(ValueError, match="gel.shape='array'"):
         bump_job(sphere_press_scene(SpherePress(), (0.1,)))
+    scene = _scene("linear")
+    wide = dict(scene.gel.parameters, cols=2, base_width=30.0)          # two bumps on a base wide enough for them
+    two = dataclasses.replace(scene, gel=GelSpec("array", tuple(wide.items())))
+    with pytest.raises(ValueError, match=r"gel rows, cols = \(1, 2\)"):
+        bump_job(two)
+    rough = dataclasses.replace(scene, contact=dataclasses.replace(scene.contact, frictionless_press=False))
+    with pytest.raises(ValueError, match="contact.frictionless_press=False"):
+        bump_job(rough)
+    sideways = dataclasses.replace(scene, loads=scene.loads[:-1] + (dataclasses.replace(scene.loads[-1],
+                                                                                        direction=(0.0, 1.0)),))
+    with pytest.raises(ValueError, match=r"shear direction=\(0.0, 1.0\)"):
+        bump_job(sideways)
     monkeypatch.setenv("FINGERTIP_GETFEM_PYTHON", str(tmp_path / "no-such-python"))
     monkeypatch.setenv("FINGERTIP_CACHE", str(tmp_path))
     with pytest.raises(GetfemUnavailable, match="apt-get install python3-getfem"):

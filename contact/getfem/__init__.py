@@ -8,8 +8,15 @@ imports getfem). Runs are kept on disk by the job's hash (``<FINGERTIP_CACHE>/ge
 ``GetfemUnavailable`` (an OSError) says how to install it.
 """
 
-from contact.getfem._run import (INSTALL_HINT, GetfemFailed, GetfemJob, GetfemUnavailable, bump_job, getfem_python,
-                                 getfem_version)
+from contact.getfem._run import (
+                                 INSTALL_HINT,
+                                 GetfemFailed,
+                                 GetfemJob,
+                                 GetfemUnavailable,
+                                 bump_job,
+                                 getfem_python,
+                                 getfem_version,
+)
 
 __all__ = ["bump_job", "GetfemJob", "getfem_python", "getfem_version", "GetfemUnavailable", "GetfemFailed",
            "INSTALL_HINT"]

@@ -6,12 +6,12 @@ from __future__ import annotations
 
 import functools
 import hashlib
-from dataclasses import dataclass
 import os
 import shutil
 import subprocess
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -43,7 +43,9 @@ def _imports_getfem(python: str) -> str | None:
                                    capture_output=True, text=True, timeout=120)
     except (OSError, subprocess.TimeoutExpired):
         return None
-    return completed.stdout.strip() or None if completed.returncode == 0 else None
+    if completed.returncode != 0:
+        return None
+    return completed.stdout.strip() or None
 
 
 def getfem_python() -> str | None:
@@ -74,11 +76,19 @@ def _job(scene) -> dict:
 
     if scene.gel.shape != "array" or scene.body.shape != "plane":
         raise ValueError(f"scene {scene.name!r}: GetFEM runs a bump under a plate (gel.shape='array', "
-                         f"body.kind='plane'), not {scene.gel.shape!r} under {scene.body.shape!r}")
+                         f"body.shape='plane'), not {scene.gel.shape!r} under {scene.body.shape!r}")
+    bumps = (scene.gel.geometry.rows, scene.gel.geometry.cols)
+    if bumps != (1, 1):
+        raise ValueError(f"scene {scene.name!r}: gel rows, cols = {bumps}; GetFEM runs one bump (1, 1)")
+    if not scene.contact.frictionless_press:
+        raise ValueError(f"scene {scene.name!r}: contact.frictionless_press=False; GetFEM presses frictionless")
     depth = [load for load in scene.loads if load.kind == LoadKind.PRESS and load.control == LoadControl.DISPLACEMENT]
     path = [load for load in scene.loads if load.kind in (LoadKind.SHEAR, LoadKind.TWIST)]
     if not depth or len(path) != 1 or path[0].control != LoadControl.DISPLACEMENT:
         raise ValueError(f"scene {scene.name!r}: GetFEM runs a press to a held depth, then one shift or angle path")
+    if path[0].kind == LoadKind.SHEAR and tuple(path[0].direction) != (1.0, 0.0):
+        raise ValueError(f"scene {scene.name!r}: shear direction={tuple(path[0].direction)}; GetFEM shifts along "
+                         f"+x, (1.0, 0.0)")
     mesh = prepare(scene).model.mesh
     points, tets = mesh.p.T, mesh.t.T
     base_thickness = scene.gel.geometry.base_thickness

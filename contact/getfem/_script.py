@@ -8,8 +8,9 @@ plane stays still and the base rises by the depth; the plate's shift along +x or
 the friction law as the previous displacement w of each increment (the law's slip is u - w), so the base never turns
 and a linear gel sees no rigid rotation. The gel is GetFEM's linearized-elasticity brick ("linear") or a
 compressible Neo-Hookean solid written out in GetFEM's weak-form language ("neo_hookean"). An increment that does not
-converge is split in halves, up to ``SPLITS`` times; a path that still does not converge stops there, and
-its converged increments are written with the reason (``stopped``).
+converge is halved (the rest of the step tried again once the half converged), up to ``HALVINGS`` failed attempts
+per increment; a path that still does not converge stops there, and its converged increments are written with the
+reason (``stopped``).
 """
 
 import sys
@@ -18,7 +19,7 @@ import time
 import getfem as gf
 import numpy as np
 
-SPLITS = 4
+HALVINGS = 16
 BASE, CONTACT = 1, 2
 # the first Piola-Kirchhoff stress of W = G/2 (J^-2/3 I1 - 3) + K/2 (J - 1)^2, GetFEM differentiates it for Newton
 NEO_HOOKE_STRESS = ("((G*pow(Det(F),-2/3))*(F-(Norm_sqr(F)/3)*Inv(F)')+(K*(Det(F)-1)*Det(F))*Inv(F)')"
@@ -135,7 +136,7 @@ def main(job_path, out_path):
                 continue
             model.set_variable("u", saved)
             splits += 1
-            if splits > SPLITS * 4:
+            if splits > HALVINGS:
                 raise NotConverged(f"GetFEM did not converge towards depth, shift, angle = {tuple(load)} "
                                    f"(from {tuple(reached)}, {splits - 1} halvings)")
             pending.append(tuple((np.array(reached) + np.array(load)) / 2))
@@ -185,7 +186,7 @@ def main(job_path, out_path):
 
 
 class NotConverged(RuntimeError):
-    """An increment that did not converge after ``SPLITS`` halvings per level."""
+    """An increment that did not converge after ``HALVINGS`` failed attempts."""
 
 
 if __name__ == "__main__":
