@@ -266,14 +266,15 @@ def run(out_dir, quick: bool = False, full: bool = False) -> dict:
             except (CalculixFailed, GetfemFailed) as error:      # reported, and the rows it would give are left out
                 lines = str(error).splitlines()
                 failed[f"{key[0]}_{key[1]}"] = next((line.strip() for line in lines if "*ERROR" in line), lines[-1])
-    # CalculiX gives (records, seconds), GetFEM (records, seconds, why it stopped early or '')
-    calculix = {key: found[0] for key, found in done.items() if not key[1].startswith("getfem")}
-    getfem = {key: found[0] for key, found in done.items() if key[1].startswith("getfem")}
-    calculix_seconds = {f"{key[0]}_{key[1]}": found[1] for key, found in done.items()
-                        if not key[1].startswith("getfem")}
-    getfem_seconds = {f"{key[0]}_{key[1]}": found[1] for key, found in done.items() if key[1].startswith("getfem")}
-    getfem_stopped = {f"{key[0]}_{key[1]}": found[2] for key, found in done.items()
-                      if key[1].startswith("getfem") and found[2]}
+    calculix, getfem, calculix_seconds, getfem_seconds, getfem_stopped = {}, {}, {}, {}, {}
+    for key, found in done.items():          # CalculiX: (records, seconds); GetFEM: (records, seconds, why it stopped)
+        name = f"{key[0]}_{key[1]}"
+        if key[1].startswith("getfem"):
+            getfem[key], getfem_seconds[name] = found[:2]
+            if found[2]:
+                getfem_stopped[name] = found[2]
+        else:
+            calculix[key], calculix_seconds[name] = found
 
     def by_model(problem, pick=lambda records: records):
         return {name: pick(calculix[problem, name]) for name in laws if (problem, name) in calculix}
