@@ -39,7 +39,7 @@ class GetfemFailed(RuntimeError):
 def _imports_getfem(python: str) -> str | None:
     """GetFEM's release if ``python`` imports getfem, else None."""
     try:
-        completed = subprocess.run([python, "-c", "import getfem; print(getfem.getfem_env('release'))"],
+        completed = subprocess.run([python, "-I", "-c", "import getfem; print(getfem.getfem_env('release'))"],
                                    capture_output=True, text=True, timeout=120)
     except (OSError, subprocess.TimeoutExpired):
         return None
@@ -82,6 +82,9 @@ def _job(scene) -> dict:
         raise ValueError(f"scene {scene.name!r}: gel rows, cols = {bumps}; GetFEM runs one bump (1, 1)")
     if not scene.contact.frictionless_press:
         raise ValueError(f"scene {scene.name!r}: contact.frictionless_press=False; GetFEM presses frictionless")
+    if scene.mesh.order != 1 or scene.mesh.volumetric != "standard":
+        raise ValueError(f"scene {scene.name!r}: mesh.order={scene.mesh.order}, mesh.volumetric="
+                         f"{str(scene.mesh.volumetric)!r}; GetFEM solves standard P1 (order 1, 'standard')")
     depth = [load for load in scene.loads if load.kind == LoadKind.PRESS and load.control == LoadControl.DISPLACEMENT]
     path = [load for load in scene.loads if load.kind in (LoadKind.SHEAR, LoadKind.TWIST)]
     if not depth or len(path) != 1 or path[0].control != LoadControl.DISPLACEMENT:
@@ -89,11 +92,13 @@ def _job(scene) -> dict:
     if path[0].kind == LoadKind.SHEAR and tuple(path[0].direction) != (1.0, 0.0):
         raise ValueError(f"scene {scene.name!r}: shear direction={tuple(path[0].direction)}; GetFEM shifts along "
                          f"+x, (1.0, 0.0)")
-    mesh = prepare(scene).model.mesh
-    points, tets = mesh.p.T, mesh.t.T
+    prepared = prepare(scene)
+    if prepared.half:
+        raise ValueError(f"scene {scene.name!r}: meshed as a half model; GetFEM runs the whole body")
+    points, tets = prepared.model.mesh.p.T, prepared.model.mesh.t.T
     base_thickness = scene.gel.geometry.base_thickness
     return dict(points=points, tets=tets, base_z=points[:, 2].min(), apex_z=points[:, 2].max(),
-                cap_floor=points[:, 2].min() + base_thickness + 1e-6, centre=points[np.argmax(points[:, 2]), :2],
+                cap_floor=points[:, 2].min() + base_thickness + 1e-6, centre=np.asarray(scene.body.center, float),
                 youngs_modulus=scene.material.E, poissons_ratio=scene.material.nu, law=str(scene.material.law),
                 size=scene.mesh.size_contact, friction_coefficient=scene.contact.friction_coefficient,
                 depth=depth[-1].values[-1], press_steps=PRESS_STEPS, path=path[0].kind.value,
@@ -128,14 +133,16 @@ def run_job(job: dict, timeout: float = 7200.0) -> tuple[Path, float]:
     target = folder / f"out.{os.getpid()}.partial.npz"          # renamed to out.npz when whole
     start = time.perf_counter()
     try:
-        completed = subprocess.run([python, str(SCRIPT), str(folder / "job.npz"), str(target)], capture_output=True,
-                                   text=True, timeout=timeout, env=dict(os.environ, OMP_NUM_THREADS="1"))
+        completed = subprocess.run([python, "-I", str(SCRIPT), str(folder / "job.npz"), str(target)],
+                                   capture_output=True, text=True, timeout=timeout,
+                                   env=dict(os.environ, OMP_NUM_THREADS="1"))
     except subprocess.TimeoutExpired:
         raise GetfemFailed(f"GetFEM did not finish {folder / 'job.npz'} within {timeout:.0f} s") from None
     if completed.returncode != 0 or not target.is_file():
         tail = "\n".join((completed.stdout + completed.stderr).strip().splitlines()[-8:])
         message = f"GetFEM stopped on {folder / 'job.npz'} (exit code {completed.returncode}):\n{tail}"
-        write_text_atomic(failed, message)
+        if completed.returncode > 0:            # the script's own error repeats; a signal (interrupt, OOM) may not
+            write_text_atomic(failed, message)
         raise GetfemFailed(message)
     os.replace(target, out)
     seconds = time.perf_counter() - start
@@ -156,8 +163,11 @@ class GetfemJob:
 
     def run(self, timeout: float = 7200.0) -> tuple[list, float, str]:
         out, seconds = run_job(self.arrays, timeout)
-        found = np.load(out)
-        return _records(self.arrays, found, self.friction_coefficient), seconds, str(found["stopped"])
+        with np.load(out) as found:
+            stopped = str(found["stopped"])
+            if not (found["kinds"] == 1).any():              # no held state to compare from
+                raise GetfemFailed(f"GetFEM's {self.name} stopped before its path: {stopped}")
+            return _records(self.arrays, found, self.friction_coefficient), seconds, stopped
 
 
 def bump_job(scene) -> GetfemJob:
@@ -183,7 +193,7 @@ def _records(job: dict, found, friction_coefficient: float) -> list:
         current = points[contact] + u[contact]
         # a point sticks where its neighbourhood's weighted slip against the plate in the increment is below the
         # CalculiX reference's tolerance (the friction law's own measure, see _script.py)
-        stuck = np.linalg.norm(slip, axis=1) <= SLIP_TOLERANCE
+        stuck = (np.linalg.norm(slip, axis=1) <= SLIP_TOLERANCE) if kind == 1 else np.ones(contact.size, bool)
         # stresses whose products with contact_state's tributary areas are the nodal forces; a point presses where
         # its force is above the round-off (~1e-19 N) of the mass-matrix product that is zero off the contact
         areas = tributary_areas(current[:, :2], triangles)

@@ -5,12 +5,13 @@ It needs numpy and getfem only. The gel is the tet mesh it is given (P1), bonded
 plane z = apex (a signed-distance obstacle of GetFEM's large-sliding contact brick: gap in the current geometry,
 Alart-Curnier augmented Lagrangian, Coulomb friction on the sliding velocity u - w of the increment). The plate's
 plane stays still and the base rises by the depth; the plate's shift along +x or turn about the bump's axis enters
-the friction law as the previous displacement w of each increment (the law's slip is u - w), so the base never turns
-and a linear gel sees no rigid rotation. The gel is GetFEM's linearized-elasticity brick ("linear") or a
-compressible Neo-Hookean solid written out in GetFEM's weak-form language ("neo_hookean"). An increment that does not
-converge is halved (the rest of the step tried again once the half converged), up to ``HALVINGS`` failed attempts
-per increment; a path that still does not converge stops there, and its converged increments are written with the
-reason (``stopped``).
+the friction law as the previous displacement w of each increment (the law's slip is u - w), so the gel is never
+turned as a whole; the Neo-Hookean gel's points are turned exactly, the linear gel's by the turn's linear part about
+their undeformed arms, as the project's linear FEM turns them. The gel is GetFEM's linearized-elasticity brick
+("linear") or a compressible Neo-Hookean solid written out in GetFEM's weak-form language ("neo_hookean"). An
+increment that does not converge is halved (the rest of the step tried again once the half converged), up to
+``HALVINGS`` failed attempts per increment; a path that still does not converge stops there, and its converged
+increments are written with the reason (``stopped``).
 """
 
 import sys
@@ -104,12 +105,21 @@ def main(job_path, out_path):
     centre = job["centre"]
     model.set_variable("base_motion", np.zeros(n_dofs))
 
+    linear = str(job["law"]) == "linear"
+
     def plate_motion(displacement, start, end):
-        """What the plate's shift and turn from loads ``start`` to ``end`` do to the points where ``displacement``
-        put them (turned about the lever arms they have there) [mm], per dof."""
-        x, y = (coordinates[k] + displacement[first_of_point + k] - centre[k] for k in (0, 1))
-        c, s = np.cos(end[2] - start[2]), np.sin(end[2] - start[2])
-        motion = np.stack([c * x - s * y - x + end[1] - start[1], s * x + c * y - y, np.zeros(n_dofs)])
+        """What the plate's shift and turn from loads ``start`` to ``end`` do to the points [mm], per dof: the
+        Neo-Hookean gel's points turned exactly about the lever arms they have where ``displacement`` put them; the
+        linear gel's by the turn's linear part about their undeformed arms, as the project's linear FEM turns them
+        (exact arcs would pull a linear gel's points inwards by (1 - cos) r, a finite-kinematics term it lacks)."""
+        turn, shift = end[2] - start[2], end[1] - start[1]
+        if linear:
+            x, y = coordinates[0] - centre[0], coordinates[1] - centre[1]
+            motion = np.stack([-turn * y + shift, turn * x, np.zeros(n_dofs)])
+        else:
+            x, y = (coordinates[k] + displacement[first_of_point + k] - centre[k] for k in (0, 1))
+            c, s = np.cos(turn), np.sin(turn)
+            motion = np.stack([c * x - s * y - x + shift, s * x + c * y - y, np.zeros(n_dofs)])
         return motion[component, np.arange(n_dofs)]
 
     def field(expression, region):
@@ -120,25 +130,27 @@ def main(job_path, out_path):
         """Reach the loads ``target`` (depth, shift, angle) from ``start``, halving the step where Newton fails:
         the base rises by the depth; the plate's shift and turn enter as the friction law's previous displacement
         w (its slip is u - w), so the gel is never turned as a whole (a linear gel is not indifferent to that)."""
-        pending, reached, splits, iterations = [target], start, 0, 0
+        pending, reached, splits, iterations, last_error = [target], start, 0, 0, ""
         while pending:
             load = pending[-1]
-            saved = model.variable("u")
-            model.set_variable("w", saved + plate_motion(saved, reached, load))
+            saved = model.from_variables()           # every unknown: a failed attempt leaves no trace
+            displacement = model.variable("u")
+            model.set_variable("w", displacement + plate_motion(displacement, reached, load))
             model.set_variable("base_motion", np.where(component == 2, load[0], 0.0))
             try:
                 count, converged = model.solve("max_res", 1e-9, "max_iter", 40, "lsearch", "simplest")
-            except RuntimeError:
-                count, converged = 40, False
+            except RuntimeError as error:              # GetFEM's own complaint, kept for the stop's reason
+                count, converged, last_error = 40, False, str(error).strip().splitlines()[-1][:200]
             iterations += int(count)
             if converged:
                 reached = pending.pop()
                 continue
-            model.set_variable("u", saved)
+            model.to_variables(saved)
             splits += 1
             if splits > HALVINGS:
                 raise NotConverged(f"GetFEM did not converge towards depth, shift, angle = {tuple(load)} "
-                                   f"(from {tuple(reached)}, {splits - 1} halvings)")
+                                   f"(from {tuple(reached)}, {splits - 1} halvings)"
+                                   + (f"; GetFEM said: {last_error}" if last_error else ""))
             pending.append(tuple((np.array(reached) + np.array(load)) / 2))
         return iterations
 
