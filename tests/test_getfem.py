@@ -17,13 +17,34 @@ needs_getfem = pytest.mark.skipif(getfem_python() is None, reason="GetFEM's Pyth
                                                                   "(apt-get install python3-getfem)")
 H = 0.8              # mm: the contact radius is 2.1-2.3 mm, under 3 elements; the two solvers share this mesh
 SHIFTS = (0.3, 0.6, 0.9)
+ANGLES = (0.15, 0.3, 0.45)
 
 
-def _scene(law: str, values=SHIFTS, hold=True):
+def _scene(law: str, values=SHIFTS, hold=True, path="shear"):
     setup = dataclasses.replace(BumpSetup(), depth=0.86)          # the linear FEM's depth of about 1 N
-    scene = bump_scene(setup, "shear", values, (0.5, 1.0), size_contact=H, hold=hold)
-    return dataclasses.replace(scene, name=f"getfem_test_{law}",
+    scene = bump_scene(setup, path, values, (0.5, 1.0), size_contact=H, hold=hold)
+    return dataclasses.replace(scene, name=f"getfem_test_{path}_{law}",
                                material=dataclasses.replace(scene.material, law=law))
+
+
+def _both_codes(path: str, values, columns) -> dict:
+    """Per law and code ("getfem", "fem"): the ``columns`` of the held state and of each increment of the path,
+    the base pressure's centre as its shift from the held state."""
+    from studies.finite_strain import _solve_bump
+
+    def table(rows):
+        held = [r for r in rows if r["load_kind"] == "press"][-1]
+        return [tuple(r[c] - held[c] if c == "base_cop_x" else r[c] for c in columns)
+                for r in [held] + [r for r in rows if r["load_kind"] == path]]
+
+    found = {}
+    with warnings.catch_warnings():          # the linear gel's small-strain warnings: these paths are past them
+        warnings.simplefilter("ignore", PhysicalLimitWarning)
+        for law in ("linear", "neo_hookean"):
+            scene = _scene(law, values, path=path)
+            found[law, "getfem"] = table([vars(r) for r in bump_job(scene).run()[0]])
+            found[law, "fem"] = table(_solve_bump(scene)[0])
+    return found
 
 
 def test_getfem_runs_only_a_held_bump_under_a_plate_and_says_how_to_install_it(monkeypatch, tmp_path):
@@ -53,23 +74,8 @@ def test_getfem_runs_only_a_held_bump_under_a_plate_and_says_how_to_install_it(m
 
 @pytest.fixture(scope="module")
 def shears():
-    """Per law and code ("getfem", "fem"): (shift [mm], P [N], Q [N], base-pressure centre's shift [mm]) of the held
-    state and each shear increment."""
-    from studies.finite_strain import _solve_bump
-
-    def table(rows):
-        held = [r for r in rows if r["load_kind"] == "press"][-1]
-        return [(r["shift"], r["normal_force"], r["tangential_force"], r["base_cop_x"] - held["base_cop_x"])
-                for r in [held] + [r for r in rows if r["load_kind"] == "shear"]]
-
-    found = {}
-    with warnings.catch_warnings():          # the linear gel's small-strain warnings: this shear is past them
-        warnings.simplefilter("ignore", PhysicalLimitWarning)
-        for law in ("linear", "neo_hookean"):
-            scene = _scene(law)
-            found[law, "getfem"] = table([vars(r) for r in bump_job(scene).run()[0]])
-            found[law, "fem"] = table(_solve_bump(scene)[0])
-    return found
+    """(shift [mm], P [N], Q [N], base-pressure centre's shift [mm]) per law and code."""
+    return _both_codes("shear", SHIFTS, ("shift", "normal_force", "tangential_force", "base_cop_x"))
 
 
 @needs_getfem
@@ -97,29 +103,11 @@ def test_getfem_sees_the_finite_strain_gel_shift_the_sensor_pressure_further_as_
     assert effect["getfem"] == pytest.approx(effect["fem"], abs=0.02)
 
 
-ANGLES = (0.15, 0.3, 0.45)
-
 
 @pytest.fixture(scope="module")
 def twists():
-    """Per law and code: (angle [rad], P [N], torque [N mm]) of the held state and each twist increment."""
-    from studies.finite_strain import _solve_bump
-
-    def table(rows):
-        held = [r for r in rows if r["load_kind"] == "press"][-1]
-        return [(r["angle"], r["normal_force"], r["torque"]) for r in [held] + [r for r in rows
-                                                                             if r["load_kind"] == "twist"]]
-
-    found = {}
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", PhysicalLimitWarning)
-        for law in ("linear", "neo_hookean"):
-            scene = dataclasses.replace(bump_scene(dataclasses.replace(BumpSetup(), depth=0.86), "twist", ANGLES,
-                                                   (0.5, 1.0), size_contact=H), name=f"getfem_test_twist_{law}")
-            scene = dataclasses.replace(scene, material=dataclasses.replace(scene.material, law=law))
-            found[law, "getfem"] = table([vars(r) for r in bump_job(scene).run()[0]])
-            found[law, "fem"] = table(_solve_bump(scene)[0])
-    return found
+    """(angle [rad], P [N], torque [N mm]) per law and code."""
+    return _both_codes("twist", ANGLES, ("angle", "normal_force", "torque"))
 
 
 @needs_getfem
