@@ -66,6 +66,13 @@ def _gel_mesh(scene: Scene, fine_radius: float, half: bool):
     return mesh_gel(scene.gel.geometry, spec).mesh
 
 
+def gel_mesh(scene: Scene):
+    """The scene's tet mesh as ``prepare`` builds it, without assembling or factorizing, and whether it is the
+    mirror half model (for an external solver that needs only the mesh)."""
+    fine_radius, half = _fine_radius_and_half(scene)
+    return _gel_mesh(scene, fine_radius, half), half
+
+
 def preparation_key(scene: Scene) -> tuple:
     """Hashable key of everything ``prepare`` depends on: scenes with equal keys can share one Prepared."""
     fine_radius, half = _fine_radius_and_half(scene)

@@ -72,7 +72,7 @@ def _job(scene) -> dict:
     """The arrays ``_script.py`` reads: the scene's own tet mesh (meshed as the project's solver meshes it), the gel,
     the held depth and the shear shifts or twist angles."""
     from contact.scene import LoadControl, LoadKind
-    from contact.solver import prepare
+    from contact.solver import gel_mesh
 
     if scene.gel.shape != "array" or scene.body.shape != "plane":
         raise ValueError(f"scene {scene.name!r}: GetFEM runs a bump under a plate (gel.shape='array', "
@@ -92,10 +92,10 @@ def _job(scene) -> dict:
     if path[0].kind == LoadKind.SHEAR and tuple(path[0].direction) != (1.0, 0.0):
         raise ValueError(f"scene {scene.name!r}: shear direction={tuple(path[0].direction)}; GetFEM shifts along "
                          f"+x, (1.0, 0.0)")
-    prepared = prepare(scene)
-    if prepared.half:
+    mesh, half = gel_mesh(scene)           # the FEM's mesh; its stiffness is not needed here
+    if half:
         raise ValueError(f"scene {scene.name!r}: meshed as a half model; GetFEM runs the whole body")
-    points, tets = prepared.model.mesh.p.T, prepared.model.mesh.t.T
+    points, tets = mesh.p.T, mesh.t.T
     base_thickness = scene.gel.geometry.base_thickness
     return dict(points=points, tets=tets, base_z=points[:, 2].min(), apex_z=points[:, 2].max(),
                 cap_floor=points[:, 2].min() + base_thickness + 1e-6, centre=np.asarray(scene.body.center, float),
