@@ -238,3 +238,42 @@ def test_a_light_held_object_at_the_minimum_is_not_taken_for_slip():
     steps = np.flatnonzero(grips[1:] > 1.2 * grips[:-1])
     assert len(steps) == 1 and grips[steps[0] + 1] == pytest.approx(0.75, rel=0.01)   # one step of half, once
     assert grips[-1] == pytest.approx(0.5, rel=0.02)
+
+
+class RisingLoadPlant(QuasiStaticPlant):
+    """A load that comes on over ``rise`` frames of the lift (the object leaves the table as the grip follows)."""
+
+    def __init__(self, tangential, torque, friction, rise):
+        super().__init__(tangential, torque, friction)
+        self.full, self.rise, self.frame_count = (np.asarray(tangential, float), torque), rise, 0
+
+    def frame(self, grip):
+        share = min(1.0, (self.frame_count + 1) / self.rise)
+        self.frame_count += 1
+        self.tangential, self.torque = share * self.full[0], share * self.full[1]
+        self._cache = {}
+        return super().frame(grip)
+
+
+def test_a_grip_pinned_at_the_actuator_limit_is_not_taken_for_slip():
+    """A moment load at mu = 1 that the prior's demand (0.7 x 0.4) puts above the actuator's limit: the load comes on
+    through the lift while the grip climbs into the limit, so nu stays put while the grip rose over the window - the
+    lift's sign of a load that follows the grip. Pinned at the limit the grip is not regulated and the test cannot
+    tell a held load from a sliding one, so it does not judge: no slip, mu_hat stays the prior (the probe, later,
+    finds the friction). The load is held throughout (the plant's slip limit at mu = 1 is far below the limit)."""
+    plant = RisingLoadPlant((0.0, 1.0), 60.0, 1.0, rise=60)
+    limit = 6.0
+    assert TIP.minimum_normal_force((0.0, 0.5), 30.0, 1.0) < 0.5 * limit
+    assert TIP.minimum_normal_force((0.0, 0.5), 30.0, 0.4 * 0.7) > limit       # the prior's demand is above it
+    controller = IncipientSlipController(IncipientSlipParameters(maximum_force=limit), TIP.centres, SAME_FRAME)
+    controller.minimum_force, controller.command = 0.5, 0.5
+    ratio_noise = np.full((2, len(TIP.centres)), 0.003)
+    grips = []
+    for _ in range(110):                              # to the probe's start (1.2 s), which lowers mu_hat on purpose
+        grips.append(controller.command)
+        controller.observe(*plant.frame(controller.command), ratio_noise)
+        for _ in range(FRAME_STEPS):
+            controller.step(GraspPhase.LIFT)
+    assert max(grips) == pytest.approx(limit, rel=1e-3)                  # the grip reached the limit
+    assert not controller.slip_seen and controller.friction_estimate == pytest.approx(0.4)
+    assert not any(plant.state(grip).gross_slip for grip in grips[60:])

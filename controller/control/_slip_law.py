@@ -35,6 +35,7 @@ APPROACH, GRASP, LIFT, HOLD, PLACE, RELEASE = (PHASE_CODES[phase] for phase in G
  P_STALL_RISE, P_STALL_FRACTION, P_GROSS_FRAMES, P_SIZE) = range(32)
 # --- rows of the per-bump signals (5, 2, k) and of the ratio signals (4, 2, k, 2) -------------------------------
 FAST, FAST_PREVIOUS, SLOW, SLOW_PREVIOUS, RATIO_NOISE = range(5)
+SATURATED = 0.98                 # a command this close to the actuator's limit is pinned there, not regulated
 MINIMUM_FRICTION = 0.05          # a slip measured at a lower ratio carried no load: it is not counted
 # the lift's test (``_lift_test``): a step up of the grip by this fraction, held for a watch window. Half: a held
 # load's nu then falls by log(1.5) = 0.41, and the verdict halfway (0.2) clears the noise margin at the contact
@@ -197,8 +198,10 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
                 reference[column] = max(reference[column], history_use[row, 2 + column])
     carried = np.zeros(3)
     # the array as a whole: against the probe's falling grip, or, in the lift, a load-driven grip (above the
-    # minimum force) whose load stopped growing below what it carries
-    lifting = scalars[X_PHASE] == LIFT and scalars[X_COMMAND] > 1.05 * scalars[X_MINIMUM] and not seen
+    # minimum force) whose load stopped growing below what it carries; not with the grip pinned at the actuator's
+    # limit (a load still coming on then keeps nu where it is, held or not: the test cannot tell them apart)
+    lifting = (scalars[X_PHASE] == LIFT and scalars[X_COMMAND] > 1.05 * scalars[X_MINIMUM] and not seen
+               and scalars[X_COMMAND] < SATURATED * parameters[P_MAXIMUM_FORCE])
     use_mode = 1 if probed else (2 if lifting and parameters[P_STALL_FRACTION] > 0.0 else 0)
     use_noise = math.sqrt(2.0 * parameters[P_SLOW_GAIN]) * wrench_noise / max(sensed, 1e-9)
     signature, total_ratio, bearing, magnitudes = slip_signature(

@@ -48,6 +48,10 @@ and is held there for a window. Held, the load stays and nu falls like 1 / P; sl
 nu stays: halfway between, with the noise margin, is the verdict. Sliding marks the array's slip (mu_hat = nu, the
 grip steps up as after any slip); held lets the grip back to its demand. The step is the safe direction.
 
+A lift's grip pinned at the actuator's limit (``maximum_force``) is not judged by the lift's stall test: a load still
+coming on keeps nu where it is at a grip that cannot follow, held or sliding alike. The probe, later, finds the
+friction.
+
 Placing and releasing: in PLACE the demand falls as the table takes the load; in RELEASE the force falls at
 ``release_rate`` of the hold force per second in proportion to how far the load has left the fingertips (at once if
 none was carried), as the displacement-target law does (``GraspForceController``).
