@@ -245,13 +245,14 @@ class RisingLoadPlant(QuasiStaticPlant):
 
     def __init__(self, tangential, torque, friction, rise):
         super().__init__(tangential, torque, friction)
-        self.full, self.rise, self.frame_count = (np.asarray(tangential, float), torque), rise, 0
+        self.full_tangential, self.full_torque, self.rise, self.frames = self.tangential, torque, rise, 0
+        self.caches = {}
 
     def frame(self, grip):
-        share = min(1.0, (self.frame_count + 1) / self.rise)
-        self.frame_count += 1
-        self.tangential, self.torque = share * self.full[0], share * self.full[1]
-        self._cache = {}
+        self.frames += 1
+        share = min(self.frames, self.rise) / self.rise
+        self.tangential, self.torque = share * self.full_tangential, share * self.full_torque
+        self._cache = self.caches.setdefault(share, {})              # the grid's states at this share of the load
         return super().frame(grip)
 
 
