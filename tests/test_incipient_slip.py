@@ -77,26 +77,32 @@ def test_probe_finds_the_friction_and_holds_near_the_limit(tangential, torque, f
 
 def test_without_rotational_detection_a_moment_is_under_gripped():
     """A moment-loaded object: the translational demand alone, |F_t| / (s_lift mu_prior) = 0.5 / (0.7 x 0.4) =
-    1.8 N per finger, is below what the array needs against the moment, so the grip falls into gross slip."""
+    1.8 N per finger, is below what the array needs against the moment, so the grip falls into gross slip, and the
+    slip is read at the translational ratio, far below mu (the grip then climbs out of it: a slip seen in the lift
+    grows the grip while the array reads its friction)."""
     plant = QuasiStaticPlant((0.0, 1.0), 40.0, 0.5)
     parameters = IncipientSlipParameters(rotational_slip_detection=False)
     controller = IncipientSlipController(parameters, TIP.centres, SAME_FRAME)
     controller.minimum_force, controller.command = 0.5, 6.0
     minimum = TIP.minimum_normal_force((0.0, 0.5), 20.0, 0.5)
     assert 0.5 / (0.7 * 0.4) < minimum
+    slid = []
     for _ in range(100):
+        slid.append(plant.state(controller.command).gross_slip)
         controller.observe(*plant.frame(controller.command))
         for _ in range(FRAME_STEPS):
             controller.step(GraspPhase.LIFT)
-    assert controller.command < minimum and plant.state(controller.command).gross_slip
+    assert any(slid) and controller.slip_seen and controller.friction_estimate < 0.5 * 0.5
     with_detection = IncipientSlipController(IncipientSlipParameters(), TIP.centres, SAME_FRAME)
     with_detection.minimum_force, with_detection.command = 0.5, 6.0
+    slid = []
     for _ in range(100):
+        slid.append(plant.state(with_detection.command).gross_slip)
         with_detection.observe(*plant.frame(with_detection.command))
         for _ in range(FRAME_STEPS):
             with_detection.step(GraspPhase.LIFT)
-    # with it: the array's margin 1 / s_lift at mu_prior = 0.4 (the true mu is 0.5)
-    assert with_detection.command > minimum and not plant.state(with_detection.command).gross_slip
+    # with it: the array's margin 1 / s_lift at mu_prior = 0.4 (the true mu is 0.5); it never slid
+    assert with_detection.command > minimum and not any(slid) and not with_detection.slip_seen
 
 
 def test_a_stuck_array_under_a_growing_force_is_not_seen_as_slip():
@@ -278,3 +284,59 @@ def test_a_grip_pinned_at_the_actuator_limit_is_not_taken_for_slip():
     assert max(grips) == pytest.approx(limit, rel=1e-3)                  # the grip reached the limit
     assert not controller.slip_seen and controller.friction_estimate == pytest.approx(0.4)
     assert not any(plant.state(grip).gross_slip for grip in grips[60:])
+
+
+def test_a_lift_that_slides_just_above_the_lifts_level_is_seen_and_gripped_at_once():
+    """mu = 0.32, just above the lift's level 0.7 x 0.4 = 0.28: from the contact minimum the bumps slide and carry mu
+    of the grip, so the demand grip x nu / level asks only 14 % more than the grip: the grip creeps up while the
+    object slides, nu stays at mu, and with the sensor's noise the lift's stall test cannot see it. A grip that grew
+    by LIFT_GROWTH over a window with nu put at the level is stepped up and tested like a load below it: the load
+    follows, the slip is seen and mu_hat read (within the filters of the sliding bumps' ratio, 3 %). After it, while
+    the array still reads its friction, the demand grows from the command, not from the slowly filtered grip that
+    lags it. Measured: seen at 0.53 s, the slide over 0.28 s later (the law before: seen as gross slip at 2.0 s, the
+    bumps sliding until then; with the test but the demand from the filtered grip: 0.37 s later); the grip settles
+    within 1.5x the slip limit."""
+    plant = QuasiStaticPlant((0.0, 2.0), 0.0, 0.32)
+    controller, log = _lift(plant, 0.5, 400)
+    assert controller.slip_seen and controller.slip_events[0][2] == "array"
+    assert controller.friction_estimate == pytest.approx(0.32, rel=0.03)
+    seen = controller.slip_events[0][0]
+    slid = [time for time, _, gross in log if gross]
+    assert seen < 0.6                                      # a window to settle, one to test, confirm frames
+    assert slid[0] < seen and slid[-1] < seen + 0.33
+    minimum = TIP.minimum_normal_force((0.0, 1.0), 0.0, 0.32)
+    assert minimum < log[-1][1] < 1.5 * minimum
+
+
+class TwoStageLoadPlant(QuasiStaticPlant):
+    """The weight comes on over ``force_rise`` frames of the lift, then a moment over ``torque_rise`` frames from
+    frame ``torque_start`` (a box whose moment builds as it tips in the fingers after it left the table)."""
+
+    def __init__(self, tangential, torque, friction, force_rise, torque_start, torque_rise):
+        super().__init__(tangential, torque, friction)
+        self.full_tangential, self.full_torque, self.frames = self.tangential, torque, 0
+        self.force_rise, self.torque_start, self.torque_rise = force_rise, torque_start, torque_rise
+        self.caches = {}
+
+    def frame(self, grip):
+        self.frames += 1
+        force_share = min(self.frames, self.force_rise) / self.force_rise
+        torque_share = min(max(self.frames - self.torque_start, 0), self.torque_rise) / self.torque_rise
+        self.tangential, self.torque = force_share * self.full_tangential, torque_share * self.full_torque
+        self._cache = self.caches.setdefault((force_share, torque_share), {})
+        return super().frame(grip)
+
+
+def test_a_held_load_that_comes_on_in_two_stages_is_not_taken_for_slip():
+    """At mu = 1 the weight comes on at once and a moment after it: nu overshoots the lift's level while the grip
+    catches the weight, comes back to it, and the grip grows several-fold over the window as the moment builds - at
+    the window's ends nu sits at the level and the grip grew, like bumps sliding just above the level. But nu moved
+    over the window: the lift test for a creeping grip asks nu to have sat still throughout (its spread within the
+    noise margin), which a load that comes on in stages does not. Without that condition the moment still coming on
+    during the test brought nu back and the array was taken for sliding at mu_hat 0.31 (the grip to 13.5 N)."""
+    plant = TwoStageLoadPlant((0.0, 1.0), 60.0, 1.0, force_rise=5, torque_start=20, torque_rise=30)
+    controller, log = _lift(plant, 0.5, 110)
+    assert not controller.slip_seen and controller.friction_estimate == pytest.approx(0.4)
+    demand = TIP.minimum_normal_force((0.0, 0.5), 30.0, 0.7 * 0.4)
+    assert log[-1][1] == pytest.approx(demand, rel=0.05)                 # the lift's demand at the prior
+    assert not any(gross for _, _, gross in log[10:])       # the weight, on at once, slid only the first frames

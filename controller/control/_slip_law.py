@@ -41,6 +41,10 @@ MINIMUM_FRICTION = 0.05          # a slip measured at a lower ratio carried no l
 # load's nu then falls by log(1.5) = 0.41, and the verdict halfway (0.2) clears the noise margin at the contact
 # minimum (0.09-0.12 of nu for the traced bottle at 0.5-0.9 N, docs/design.md sec. 12)
 LIFT_STEP = 0.5
+# ... and a grip that grew by this fraction over the window while nu sat at the lift's level or above: sliding just
+# above the level, the load follows the grip and the demand asks only mu / level more (tuning draws: 0.2 and 0.3
+# alike, 0.5 one drop more)
+LIFT_GROWTH = 0.3
 LIFT_UNTRIED, LIFT_STEPPED, LIFT_DONE = 0.0, 1.0, 2.0
 # what ``observe_frame`` saw: nothing, a single bump sliding, the grasp's carried load falling with its grip (gross
 # slip), the array's utilisation staying put while its grip fell (the array sliding as a whole)
@@ -76,7 +80,13 @@ def _target(parameters, scalars):
     the compliant fingers at a few Hz; a demand that followed the swing would drive it)."""
     probing_or_seen = scalars[X_SLIP_SEEN] > 0.0 or scalars[X_PROBING] > 0.0
     fraction = parameters[P_SAFETY] if probing_or_seen else parameters[P_LIFT_SAFETY]
-    return scalars[X_GRIP] * _first_min(scalars[X_USE_SLOW], 1e6) / (fraction * scalars[X_FRICTION])
+    grip = scalars[X_GRIP]
+    # after a slip in the lift, an array still at its friction slides: grow from the command, which the slowly
+    # filtered grip lags (the lag halved the growth while the object slid)
+    if (scalars[X_PHASE] == LIFT and scalars[X_SLIP_SEEN] > 0.0 and scalars[X_PROBING] == 0.0
+            and scalars[X_USE_SLOW] >= scalars[X_FRICTION]):
+        grip = _first_max(grip, scalars[X_COMMAND])
+    return grip * _first_min(scalars[X_USE_SLOW], 1e6) / (fraction * scalars[X_FRICTION])
 
 
 @njit_cached(inline="always")
@@ -85,7 +95,7 @@ def _ema(value, target, gain):
 
 
 @njit_cached
-def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noise, full, frames):
+def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noise, use_spread, full, frames):
     """The lift's test of a load that does not come on (once per lift): the grip's utilisation nu has sat below the
     lift's level for a window, neither rising nor falling (a load that eases after the lift's acceleration lowers
     nu while the grip lags: that is not it) - the grip is above what the load asks, which a held load
@@ -94,16 +104,26 @@ def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noi
     stays and nu falls like 1 / P; sliding, the load follows the grip and nu stays. Halfway between (with the noise
     margin) is the verdict, and either must hold for confirm_frames frames in a row: sliding marks the array's slip
     (signature[1, count]: mu_hat becomes nu), held lets the grip go back to its demand. Not while the probe runs (it
-    lowers the grip on purpose); a test still running when the lift ends is judged on into the hold."""
+    lowers the grip on purpose); a test still running when the lift ends is judged on into the hold. The same test
+    runs when nu has sat still at the level or above while the grip grew by LIFT_GROWTH over the window: bumps that
+    slide at a friction just above the level keep nu = mu and the demand creeps up with the grip."""
     level = parameters[P_LIFT_SAFETY] * scalars[X_FRICTION]
     if scalars[X_LIFT_TEST] == LIFT_UNTRIED:
+        still = abs(use_now[0] - use_then[0]) <= use_noise
+        below = max(use_now[0], use_then[0]) + use_noise < level
+        creeping = (use_now[0] >= level - use_noise and use_spread <= use_noise
+                    and use_now[1] >= (1.0 + LIFT_GROWTH) * use_then[1])
         # only where the lift's own stall test is blind: its noise margin more than twice the rise it allows
         if (scalars[X_PHASE] == LIFT and scalars[X_PROBING] == 0.0 and use_now[1] > 0.0
                 and full and MINIMUM_FRICTION < use_then[0] and MINIMUM_FRICTION < use_now[0]
-                and use_noise > 2.0 * parameters[P_STALL_RISE] * use_now[0]
-                and max(use_now[0], use_then[0]) + use_noise < level and abs(use_now[0] - use_then[0]) <= use_noise):
+                and use_noise > 2.0 * parameters[P_STALL_RISE] * use_now[0] and still and (below or creeping)):
             scalars[X_LIFT_TEST], scalars[X_LIFT_FRAMES], scalars[X_LIFT_HELD] = LIFT_STEPPED, 0.0, 0.0
             scalars[X_LIFT_USE], scalars[X_LIFT_GRIP] = use_now[0], use_now[1]
+            if scalars[X_SENSED_MEAN] > 0.0 and scalars[X_COMMAND_MEAN] > 0.0:
+                # the step's reference: the command in the sensed scale, which the slowly filtered grip lags when
+                # the grip was growing (the lag would pass for part of the step's rise)
+                scalars[X_LIFT_GRIP] = _first_max(use_now[1], scalars[X_COMMAND] * scalars[X_SENSED_MEAN]
+                                                  / scalars[X_COMMAND_MEAN])
             scalars[X_LIFT_HOLD] = _first_min(scalars[X_COMMAND] * (1.0 + LIFT_STEP), parameters[P_MAXIMUM_FORCE])
             scalars[X_COMMAND] = scalars[X_LIFT_HOLD]
     elif scalars[X_LIFT_TEST] == LIFT_STEPPED:
@@ -216,7 +236,13 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
         parameters[P_LIFT_SAFETY] * scalars[X_FRICTION],
         parameters[P_STALL_RISE], parameters[P_STALL_FRACTION])
     if not seen and (scalars[X_PHASE] == LIFT or scalars[X_LIFT_TEST] == LIFT_STEPPED):
-        _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noise, written >= frames, frames)
+        # nu's spread over the window (largest less smallest, this frame's included)
+        low = high = use_now[0]
+        for back in range(1, min(written, frames) + 1):
+            value = history_use[(written - back) % frames, 0]
+            low, high = _first_min(low, value), _first_max(high, value)
+        _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noise, high - low,
+                   written >= frames, frames)
     history_force[oldest] = signals[SLOW]
     history_ratios[oldest] = magnitudes
     history_use[oldest, :2] = use_now
