@@ -236,11 +236,12 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
         parameters[P_LIFT_SAFETY] * scalars[X_FRICTION],
         parameters[P_STALL_RISE], parameters[P_STALL_FRACTION])
     if not seen and (scalars[X_PHASE] == LIFT or scalars[X_LIFT_TEST] == LIFT_STEPPED):
-        # nu's spread over the window (largest less smallest, this frame's included)
+        # nu's spread over the window (largest less smallest, this frame's included), for a test yet to start
         low = high = use_now[0]
-        for back in range(1, min(written, frames) + 1):
-            value = history_use[(written - back) % frames, 0]
-            low, high = _first_min(low, value), _first_max(high, value)
+        if scalars[X_LIFT_TEST] == LIFT_UNTRIED:
+            for back in range(1, min(written, frames) + 1):
+                value = history_use[(written - back) % frames, 0]
+                low, high = _first_min(low, value), _first_max(high, value)
         _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noise, high - low,
                    written >= frames, frames)
     history_force[oldest] = signals[SLOW]
