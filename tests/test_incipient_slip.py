@@ -246,20 +246,30 @@ def test_a_light_held_object_at_the_minimum_is_not_taken_for_slip():
     assert grips[-1] == pytest.approx(0.5, rel=0.02)
 
 
-class RisingLoadPlant(QuasiStaticPlant):
-    """A load that comes on over ``rise`` frames of the lift (the object leaves the table as the grip follows)."""
+class TwoStageLoadPlant(QuasiStaticPlant):
+    """The weight comes on over ``force_rise`` frames of the lift, then a moment over ``torque_rise`` frames from
+    frame ``torque_start`` (a box whose moment builds as it tips in the fingers after it left the table)."""
 
-    def __init__(self, tangential, torque, friction, rise):
+    def __init__(self, tangential, torque, friction, force_rise, torque_start, torque_rise):
         super().__init__(tangential, torque, friction)
-        self.full_tangential, self.full_torque, self.rise, self.frames = self.tangential, torque, rise, 0
+        self.full_tangential, self.full_torque, self.frames = self.tangential, torque, 0
+        self.force_rise, self.torque_start, self.torque_rise = force_rise, torque_start, torque_rise
         self.caches = {}
 
     def frame(self, grip):
         self.frames += 1
-        share = min(self.frames, self.rise) / self.rise
-        self.tangential, self.torque = share * self.full_tangential, share * self.full_torque
-        self._cache = self.caches.setdefault(share, {})              # the grid's states at this share of the load
+        force_share = min(self.frames, self.force_rise) / self.force_rise
+        torque_share = min(max(self.frames - self.torque_start, 0), self.torque_rise) / self.torque_rise
+        self.tangential, self.torque = force_share * self.full_tangential, torque_share * self.full_torque
+        self._cache = self.caches.setdefault((force_share, torque_share), {})
         return super().frame(grip)
+
+
+class RisingLoadPlant(TwoStageLoadPlant):
+    """A load that comes on over ``rise`` frames of the lift (the object leaves the table as the grip follows)."""
+
+    def __init__(self, tangential, torque, friction, rise):
+        super().__init__(tangential, torque, friction, rise, 0, rise)
 
 
 def test_a_grip_pinned_at_the_actuator_limit_is_not_taken_for_slip():
@@ -290,7 +300,7 @@ def test_a_lift_that_slides_just_above_the_lifts_level_is_seen_and_gripped_at_on
     """mu = 0.32, just above the lift's level 0.7 x 0.4 = 0.28: from the contact minimum the bumps slide and carry mu
     of the grip, so the demand grip x nu / level asks only 14 % more than the grip: the grip creeps up while the
     object slides, nu stays at mu, and with the sensor's noise the lift's stall test cannot see it. A grip that grew
-    by LIFT_GROWTH over a window with nu put at the level is stepped up and tested like a load below it: the load
+    by LIFT_GROWTH over a window with nu sitting at the level is stepped up and tested like a load below it: the load
     follows, the slip is seen and mu_hat read (within the filters of the sliding bumps' ratio, 3 %). After it, while
     the array still reads its friction, the demand grows from the command, not from the slowly filtered grip that
     lags it. Measured: seen at 0.53 s, the slide over 0.28 s later (the law before: seen as gross slip at 2.0 s, the
@@ -306,25 +316,6 @@ def test_a_lift_that_slides_just_above_the_lifts_level_is_seen_and_gripped_at_on
     assert slid[0] < seen and slid[-1] < seen + 0.33
     minimum = TIP.minimum_normal_force((0.0, 1.0), 0.0, 0.32)
     assert minimum < log[-1][1] < 1.5 * minimum
-
-
-class TwoStageLoadPlant(QuasiStaticPlant):
-    """The weight comes on over ``force_rise`` frames of the lift, then a moment over ``torque_rise`` frames from
-    frame ``torque_start`` (a box whose moment builds as it tips in the fingers after it left the table)."""
-
-    def __init__(self, tangential, torque, friction, force_rise, torque_start, torque_rise):
-        super().__init__(tangential, torque, friction)
-        self.full_tangential, self.full_torque, self.frames = self.tangential, torque, 0
-        self.force_rise, self.torque_start, self.torque_rise = force_rise, torque_start, torque_rise
-        self.caches = {}
-
-    def frame(self, grip):
-        self.frames += 1
-        force_share = min(self.frames, self.force_rise) / self.force_rise
-        torque_share = min(max(self.frames - self.torque_start, 0), self.torque_rise) / self.torque_rise
-        self.tangential, self.torque = force_share * self.full_tangential, torque_share * self.full_torque
-        self._cache = self.caches.setdefault((force_share, torque_share), {})
-        return super().frame(grip)
 
 
 def test_a_held_load_that_comes_on_in_two_stages_is_not_taken_for_slip():
