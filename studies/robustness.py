@@ -100,7 +100,7 @@ def run(out_dir, quick: bool = False, trials: int | None = None, full: bool = Fa
 def summarise(rows) -> list[dict]:
     """One row per cell and object: outcome counts, success rate and its Wilson interval, grip and estimate."""
     from controller.closed_loop import OUTCOMES
-    from studies.table1 import wilson_interval
+    from controller.design import wilson_interval
 
     out = []
     for cell in dict.fromkeys(row["cell"] for row in rows):
@@ -170,7 +170,7 @@ def _target_met(single, within) -> bool | None:
 
 def friction_bands(rows) -> list[dict]:
     """Held over every cell and object below, around and above the controller's prior friction (0.4)."""
-    from studies.table1 import wilson_interval
+    from controller.design import wilson_interval
 
     out = []
     for low, high in FRICTION_BANDS:

@@ -43,14 +43,6 @@ def add_arguments(parser) -> None:
     add_plant_arguments(parser)
 
 
-def wilson_interval(successes: int, trials: int) -> tuple[float, float]:
-    """95 % Wilson score interval of a success rate (scipy.stats.binomtest)."""
-    from scipy.stats import binomtest
-
-    interval = binomtest(int(successes), int(trials)).proportion_ci(confidence_level=0.95, method="wilson")
-    return float(interval.low), float(interval.high)
-
-
 def _row(result, info) -> dict:
     settings = result.settings
     return dict(object=info["object"], trial=info["trial"], friction_coefficient=settings.friction_coefficient,
@@ -108,6 +100,7 @@ def run(out_dir, quick: bool = False, trials: int | None = None, seed: int | Non
 
 def _summary(rows) -> dict:
     from controller.closed_loop import OUTCOMES
+    from controller.design import wilson_interval
 
     objects = {}
     for name in dict.fromkeys(row["object"] for row in rows):
