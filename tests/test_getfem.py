@@ -89,7 +89,6 @@ def test_getfem_sees_the_finite_strain_gel_shift_the_sensor_pressure_further_as_
     assert effect["getfem"] == pytest.approx(effect["fem"], abs=0.02)
 
 
-
 @pytest.fixture(scope="module")
 def twists():
     """(angle [rad], P [N], torque [N mm]) per law and code."""

@@ -90,6 +90,14 @@ def _target(parameters, scalars):
 
 
 @njit_cached(inline="always")
+def _force_scale(scalars):
+    """The force loop's scale over the sensed force [-]: the command against the sensed force over a second (the
+    estimator's scale error; a lag of the grip behind its command averages out), within 0.5-2."""
+    scale = scalars[X_COMMAND_MEAN] / scalars[X_SENSED_MEAN] if scalars[X_SENSED_MEAN] > 0.0 else 1.0
+    return _first_min(_first_max(scale, 0.5), 2.0)
+
+
+@njit_cached(inline="always")
 def _ema(value, target, gain):
     return target if value == 0.0 else value + gain * (target - value)
 
@@ -118,12 +126,10 @@ def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noi
                 and full and MINIMUM_FRICTION < use_then[0] and MINIMUM_FRICTION < use_now[0]
                 and use_noise > 2.0 * parameters[P_STALL_RISE] * use_now[0] and still and (below or creeping)):
             scalars[X_LIFT_TEST], scalars[X_LIFT_FRAMES], scalars[X_LIFT_HELD] = LIFT_STEPPED, 0.0, 0.0
-            scalars[X_LIFT_USE], scalars[X_LIFT_GRIP] = use_now[0], use_now[1]
-            if scalars[X_SENSED_MEAN] > 0.0 and scalars[X_COMMAND_MEAN] > 0.0:
-                # the step's reference: the command in the sensed scale, which the slowly filtered grip lags when
-                # the grip was growing (the lag would pass for part of the step's rise)
-                scalars[X_LIFT_GRIP] = _first_max(use_now[1], scalars[X_COMMAND] * scalars[X_SENSED_MEAN]
-                                                  / scalars[X_COMMAND_MEAN])
+            # the step's reference grip: the command in the sensed scale, which the slowly filtered grip lags when
+            # the grip was growing (the lag would pass for part of the step's rise)
+            scalars[X_LIFT_USE] = use_now[0]
+            scalars[X_LIFT_GRIP] = _first_max(use_now[1], scalars[X_COMMAND] / _force_scale(scalars))
             scalars[X_LIFT_HOLD] = _first_min(scalars[X_COMMAND] * (1.0 + LIFT_STEP), parameters[P_MAXIMUM_FORCE])
             scalars[X_COMMAND] = scalars[X_LIFT_HOLD]
     elif scalars[X_LIFT_TEST] == LIFT_STEPPED:
@@ -178,9 +184,8 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
         scalars[X_SENSED_MEAN] = _ema(scalars[X_SENSED_MEAN], sensed, parameters[P_SCALE_GAIN])
     scalars[X_USE_SLOW] = _ema(scalars[X_USE_SLOW], use, parameters[P_SLOW_GAIN])
     scalars[X_SENSED_SLOW] = _ema(scalars[X_SENSED_SLOW], sensed, parameters[P_SLOW_GAIN])
-    scale = scalars[X_COMMAND_MEAN] / scalars[X_SENSED_MEAN] if scalars[X_SENSED_MEAN] > 0.0 else 1.0
     # the slowly filtered grip: a fast one would feed the object's own swing in the fingers back into the demand
-    scalars[X_GRIP] = scalars[X_SENSED_SLOW] * _first_min(_first_max(scale, 0.5), 2.0)
+    scalars[X_GRIP] = scalars[X_SENSED_SLOW] * _force_scale(scalars)
     if scalars[X_WATCHING] == 0.0:
         return NO_SLIP
     # the slip watch (module docstring of incipient_slip: per-bump ratios against their forces, the total load)
