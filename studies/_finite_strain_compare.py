@@ -149,8 +149,8 @@ def twist_rows(fem: list, others: dict, friction_coefficient: float, contact_rad
 
 def _at_fem_ratios(problem: str, axis: str, quantities, curve, fem: list, others: dict) -> list[dict]:
     """One row per quantity at each of the linear FEM's load ratios up to the highest any other model reached; each
-    model's curve (``curve`` of its records: the ratio, then one column per quantity) read at that ratio, NaN past
-    the highest ratio that model reached."""
+    model's curve (``curve`` of its records: the ratio, then one column per quantity) read at that ratio, NaN outside
+    the ratios that model reached (np.interp would repeat its end values there)."""
     models = {"fem_linear": curve(fem),
               **{name: curve([r if isinstance(r, dict) else vars(r) for r in records])
                  for name, records in others.items()}}
@@ -159,7 +159,7 @@ def _at_fem_ratios(problem: str, axis: str, quantities, curve, fem: list, others
     for k, ratio in enumerate(models["fem_linear"][0]):
         if ratio > top:
             break
-        at = {name: [float(np.interp(ratio, c[0], column)) if ratio <= c[0].max() else math.nan
+        at = {name: [float(np.interp(ratio, c[0], column)) if c[0][0] <= ratio <= c[0][-1] else math.nan
                      for column in c[1:]] for name, c in models.items()}
         at["fem_linear"] = [c[k] for c in models["fem_linear"][1:]]
         for j, (quantity, relative) in enumerate(quantities):

@@ -88,3 +88,18 @@ def test_a_model_that_stops_early_leaves_nan_past_its_last_ratio_not_fewer_rows(
     assert [r["load"] for r in cop] == [0.2, 0.4, 0.6, 0.8]
     assert [math.isnan(r["getfem_neo_hooke"]) for r in cop] == [False, False, True, True]
     assert cop[-1]["error_fem_vs_fem_neo_hooke"] == pytest.approx(5.0 / 6.0 - 1.0)
+
+
+def test_a_model_that_starts_above_the_fems_first_ratio_leaves_nan_there_not_its_first_value():
+    from studies._finite_strain_compare import shear_rows
+
+    def path(ratios, cop_gain):       # the pressed state, then increments at the load ratios Q/(mu P), P = 1 N
+        return [dict(normal_force=1.0, tangential_force=0.0, shift=0.0, stick_ratio=1.0, base_cop_x=0.0)] + [
+            dict(normal_force=1.0, tangential_force=q, shift=1.8 * q, stick_ratio=1.0 - q, base_cop_x=cop_gain * q)
+            for q in ratios]
+
+    rows = shear_rows(path((0.2, 0.4, 0.6), 5.0), {"getfem_neo_hooke": path((0.3, 0.4, 0.6), 6.0)}, 1.0)
+    cop = [r for r in rows if r["quantity"] == "base_cop_shift"]
+    # np.interp alone would repeat the model's value at 0.3 (1.8 mm) at 0.2, a load it never reached
+    assert math.isnan(cop[0]["getfem_neo_hooke"])
+    assert cop[1]["getfem_neo_hooke"] == pytest.approx(6.0 * 0.4)
