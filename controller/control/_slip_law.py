@@ -109,8 +109,8 @@ def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noi
     nu while the grip lags: that is not it) - the grip is above what the load asks, which a held load
     corrects within the loop's time (nu ~ 1 / P rises to the level as the grip sinks), but bumps that slide carry
     mu of any grip and keep nu = mu. The grip steps up by LIFT_STEP and is held there for a window: held, the load
-    stays and nu falls like 1 / P; sliding, the load follows the grip and nu stays. Halfway between (with the noise
-    margin) is the verdict, and either must hold for confirm_frames frames in a row: sliding marks the array's slip
+    stays and nu falls like 1 / P; sliding, the load follows the grip and nu stays. Halfway between is the verdict,
+    and either must hold for confirm_frames frames in a row: sliding marks the array's slip
     (signature[1, count]: mu_hat becomes nu), held lets the grip go back to its demand. Not while the probe runs (it
     lowers the grip on purpose); a test still running when the lift ends is judged on into the hold. The same test
     runs when nu has sat still at the level or above while the grip grew by LIFT_GROWTH over the window: bumps that
@@ -139,7 +139,9 @@ def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noi
             follows = False                         # the carried load followed the grip: nu stayed where it was
             if rise >= math.log(1.0 + 2.0 * parameters[P_FORCE_DROP]) and use_now[0] > 0.0:
                 change = math.log(use_now[0] / scalars[X_LIFT_USE])
-                follows = change - use_noise / use_now[0] > -0.5 * rise
+                # halfway between held (nu falls by the rise) and sliding (it stays), with no margin towards
+                # 'held': a sliding array whose read nu moved with the grip was called held inside the margin
+                follows = change > -0.5 * rise
             if follows:
                 signature[1, count] = True
                 scalars[X_LIFT_HELD] = 0.0
