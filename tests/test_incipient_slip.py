@@ -349,18 +349,18 @@ class GripScaledSensorPlant(QuasiStaticPlant):
 
 def test_a_lift_step_whose_verdict_lies_within_the_noise_is_not_called_held():
     """mu = 0.2, below the lift's level: the bumps slide from the contact minimum, and the sensor reads their nu
-    falling by 0.28 of what a held load's would as the grip rises (as traced on a tuning draw with the plant's
-    factors at 20 %: nu 0.205 -> 0.176 while the sensed grip rose 63 %). When the lift test steps the grip up, held,
-    nu falls like 1 / P; sliding, it stays; the verdict is halfway between. The law before moved that line towards
-    'held' by the noise margin: it called this step held, let the grip back to the contact minimum and the array slid
-    on unseen to the end (the bottle of that draw was dropped). Read at halfway, the slip is seen at the step's
-    verdict, mu_hat is the sensor's nu there (11 % low: its bias at the step) and the grip grows from it."""
-    plant = GripScaledSensorPlant((0.0, 2.0), 0.0, 0.2, bias=0.28, reference=0.5, cap=0.75)
+    falling by 0.35 of what a held load's would as the grip rises (as traced on a tuning draw with the plant's
+    factors at 20 %: nu 0.213 -> 0.175 while the sensed grip rose 0.52 -> 0.92 N). When the lift test steps the grip
+    up, held, nu falls like 1 / P; sliding, it stays; the verdict is halfway between. The law before moved that line
+    towards 'held' by the noise margin: it called this step held, let the grip back to the contact minimum and the
+    array slid on unseen to the end (the bottle of that draw was dropped). Read at halfway, the slip is seen at the
+    step's verdict, mu_hat is the sensor's nu there (13 % low: its bias at the step) and the grip grows from it."""
+    plant = GripScaledSensorPlant((0.0, 2.0), 0.0, 0.2, bias=0.35, reference=0.5, cap=0.75)
     controller, log = _lift(plant, 0.5, 400)
     assert controller.slip_seen and controller.slip_events[0][2] == "array"
     grips = np.array([grip for _, grip, _ in log])
     stepped = np.flatnonzero(grips[1:] > 1.2 * grips[:-1])[0] + 1
     assert controller.slip_events[0][0] < log[stepped][0] + 0.35          # a window after the step, confirm frames
-    assert controller.friction_estimate == pytest.approx(0.2 * 1.5 ** -0.28, rel=0.03)
+    assert controller.friction_estimate == pytest.approx(0.2 * 1.5 ** -0.35, rel=0.03)
     minimum = TIP.minimum_normal_force((0.0, 1.0), 0.0, 0.2)
     assert not log[-1][2] and minimum < grips[-1] < 1.5 * minimum            # held at the end, near its limit
