@@ -74,7 +74,7 @@ _OWN = ("bump_{0} and its peak against the project's Neo-Hookean gel (contact._f
 # radius leaves 5 % at a/R = 0.58 (+5.1 %); the spread of the base pressure stays within 1.2 % to a/R = 0.63.
 # Shear and twist against GetFEM's Neo-Hookean gel on the FEM's mesh (CalculiX's diverges when friction comes on;
 # the project's own Neo-Hookean gel meets GetFEM's within 1.1 % in tangential compliance, 0.4 % in the base
-# pressure's centre and 1.2 % in torsional compliance to T/(mu P a) = 0.43-0.46, 7.5 % at 0.52 near gross slip), held
+# pressure's centre and 1.0 % in torsional compliance to T/(mu P a) = 0.43-0.46, 7.5 % at 0.52 near gross slip), held
 # at the depths of 1.5 N (a/R = 0.52) and 2.6 N (0.63), the tighter of the two: the tangential compliance to Q/(mu P)
 # = 0.51 (-7.9 % at 0.64; 0.77 at 1.5 N); the base pressure's centre is 22-39 % short at every load ratio measured
 # and the torsional compliance 16-36 % long to T/(mu P a) = 0.50 (the normal force's moment on the sheared contact,
