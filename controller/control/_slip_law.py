@@ -26,13 +26,14 @@ APPROACH, GRASP, LIFT, HOLD, PLACE, RELEASE = (PHASE_CODES[phase] for phase in G
 (X_COMMAND, X_MINIMUM, X_FRICTION, X_PROBING, X_SLIP_SEEN, X_NEED, X_TIME, X_STARTED, X_CONTACTS, X_WATCHING,
  X_PROBE_BEGUN, X_CARRY_TIME, X_RELEASING, X_RELEASE_NEED, X_RELEASE_FORCE, X_FRAMES, X_HISTORY, X_PHASE, X_GRIP,
  X_CARRY_SLIP, X_SENSED, X_COMMAND_MEAN, X_SENSED_MEAN, X_USE_SLOW, X_SENSED_SLOW, X_PROBED, X_LIFT_TEST,
- X_LIFT_FRAMES, X_LIFT_USE, X_LIFT_GRIP, X_LIFT_HOLD, X_LIFT_HELD, X_SIZE) = range(33)
+ X_LIFT_FRAMES, X_LIFT_USE, X_LIFT_GRIP, X_LIFT_HOLD, X_LIFT_HELD, X_SLID_USE, X_SLID_GRIP, X_SLIDING,
+ X_SLID_HELD, X_PLACE_FORCE, X_SIZE) = range(38)
 # --- parameter slots --------------------------------------------------------------------------------------------
 (P_PERIOD, P_FAST_GAIN, P_SLOW_GAIN, P_APPROACH_FORCE, P_RAMP_RATE, P_MAXIMUM_FORCE, P_LOOP_RATE,
  P_RELEASE_LOOP_RATE, P_SAFETY, P_LIFT_SAFETY, P_PRIOR_FRICTION, P_MAXIMUM_FRICTION, P_PROBE_RATE, P_PROBE_DELAY,
  P_TOTAL_DROP, P_WATCH_TIME, P_FORCE_DROP, P_STICK_EXPONENT, P_CONFIRM_FRAMES, P_LOADED_SHARE, P_FORCE_SHARE,
  P_RELEASE_RATE, P_ROTATIONAL, P_NOISE_MARGIN, P_FULL_SEARCH_EVERY, P_WARM_STEP, P_REACH, P_SCALE_GAIN,
- P_STALL_RISE, P_STALL_FRACTION, P_GROSS_FRAMES, P_SIZE) = range(32)
+ P_STALL_RISE, P_STALL_FRACTION, P_GROSS_FRAMES, P_SLIDE_FRAMES, P_SIZE) = range(33)
 # --- rows of the per-bump signals (5, 2, k) and of the ratio signals (4, 2, k, 2) -------------------------------
 FAST, FAST_PREVIOUS, SLOW, SLOW_PREVIOUS, RATIO_NOISE = range(5)
 SATURATED = 0.98                 # a command this close to the actuator's limit is pinned there, not regulated
@@ -80,13 +81,14 @@ def _target(parameters, scalars):
     the compliant fingers at a few Hz; a demand that followed the swing would drive it)."""
     probing_or_seen = scalars[X_SLIP_SEEN] > 0.0 or scalars[X_PROBING] > 0.0
     fraction = parameters[P_SAFETY] if probing_or_seen else parameters[P_LIFT_SAFETY]
-    grip = scalars[X_GRIP]
-    # after a slip in the lift, an array still at its friction slides: grow from the command, which the slowly
-    # filtered grip lags (the lag halved the growth while the object slid)
+    grip, use = scalars[X_GRIP], _first_min(scalars[X_USE_SLOW], 1e6)
+    # after a slip in the lift, an array that still slides (observe_frame) is at its limit, nu = mu_hat whatever it
+    # reads: grow from the command, which the slowly filtered grip lags (the lag halved the growth while the
+    # object slid)
     if (scalars[X_PHASE] == LIFT and scalars[X_SLIP_SEEN] > 0.0 and scalars[X_PROBING] == 0.0
-            and scalars[X_USE_SLOW] >= scalars[X_FRICTION]):
-        grip = _first_max(grip, scalars[X_COMMAND])
-    return grip * _first_min(scalars[X_USE_SLOW], 1e6) / (fraction * scalars[X_FRICTION])
+            and scalars[X_SLIDING] > 0.0):
+        grip, use = _first_max(grip, scalars[X_COMMAND]), _first_max(use, scalars[X_FRICTION])
+    return grip * use / (fraction * scalars[X_FRICTION])
 
 
 @njit_cached(inline="always")
@@ -149,6 +151,20 @@ def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noi
                 scalars[X_LIFT_HELD] += 1.0
                 if scalars[X_LIFT_HELD] >= parameters[P_CONFIRM_FRAMES]:
                     scalars[X_LIFT_TEST] = LIFT_DONE
+
+
+@njit_cached
+def _slide_verdict(parameters, now_use, now_grip, then_use, then_grip):
+    """Does an array that slipped still slide, from its utilisation nu and grip now and some frames ago: 1 if the
+    grip grew and nu did not fall with it (sliding, the load follows the grip and nu stays; held, the load stays and
+    nu falls like 1 / P; halfway between, as the lift's test), 0 if it fell with it, -1 if the grip did not grow by
+    twice force_drop (no verdict)."""
+    if not (then_use > 0.0 and then_grip > 0.0 and now_use > 0.0 and now_grip > 0.0):
+        return -1
+    rise = math.log(now_grip / then_grip)
+    if rise < math.log(1.0 + 2.0 * parameters[P_FORCE_DROP]):
+        return -1
+    return 1 if math.log(now_use / then_use) > -0.5 * rise else 0
 
 
 @njit_cached
@@ -215,6 +231,27 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
     wrench_noise = parameters[P_NOISE_MARGIN] * math.sqrt(wrench_noise)
     use_now = np.array([scalars[X_USE_SLOW], scalars[X_SENSED_SLOW]])
     use_then = history_use[oldest, :2] if written >= frames else np.zeros(2)
+    fast_now = np.array([scalars[X_NEED], scalars[X_SENSED]])
+    if seen and scalars[X_PHASE] == LIFT and scalars[X_PROBING] == 0.0:
+        # does the array still slide after the slip? Over the last SLIDE_FRAMES frames of the fast signals (the slow
+        # ones lag a grip growing several-fold a second by a tenth of a second) or since the slip for the first of
+        # them; where the grip grew too little for a verdict there, over the window of the slow ones (a slow slide);
+        # else while it reads its friction. Its read nu may sit below the mu_hat its slip set (an estimator whose
+        # scale error changes with the force)
+        back = int(parameters[P_SLIDE_FRAMES])
+        if written >= back:
+            then_use, then_grip = history_use[(written - back) % frames, 5], history_use[(written - back) % frames, 6]
+        else:
+            then_use, then_grip = scalars[X_SLID_USE], scalars[X_SLID_GRIP]
+        verdict = _slide_verdict(parameters, fast_now[0], fast_now[1], then_use, then_grip)
+        if verdict == 0:
+            scalars[X_SLID_HELD] = written
+        # the slow window only once it lies after the fast one's last 'held' (across it, it would read the slide
+        # before as sliding now)
+        if verdict < 0 and written >= frames and written - scalars[X_SLID_HELD] >= frames:
+            verdict = _slide_verdict(parameters, use_now[0], use_now[1], use_then[0], use_then[1])
+        slides = verdict > 0 if verdict >= 0 else scalars[X_USE_SLOW] >= scalars[X_FRICTION]
+        scalars[X_SLIDING] = 1.0 if slides else 0.0
     # the carried wrench's reference: its largest value (and the grip's) over the last GROSS_FRAMES frames
     window = int(parameters[P_GROSS_FRAMES])
     reference = np.full(3, -1.0)
@@ -254,7 +291,8 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
     history_force[oldest] = signals[SLOW]
     history_ratios[oldest] = magnitudes
     history_use[oldest, :2] = use_now
-    history_use[oldest, 2:] = carried
+    history_use[oldest, 2:5] = carried
+    history_use[oldest, 5:7] = fast_now
     scalars[X_HISTORY] = written + 1
     confirm = parameters[P_CONFIRM_FRAMES]
     finger, index, measured = 0, -1, 0.0
@@ -287,6 +325,8 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
     scalars[X_SLIP_SEEN], scalars[X_PROBING] = 1.0, 0.0
     scalars[X_LIFT_TEST] = LIFT_DONE                  # a slip seen ends the lift's test (and its hold on the grip)
     scalars[X_CARRY_SLIP] = 1.0
+    scalars[X_SLID_USE], scalars[X_SLID_GRIP], scalars[X_SLIDING], scalars[X_SLID_HELD] = \
+        fast_now[0], fast_now[1], 1.0, -frames
     # step up at once, by at least twice the safety margin: a grasp that slid carried less than its load while
     # sliding, so the demand read off its loads is short of what holds it, and what slides has gathered momentum
     step_up = _first_max(_first_max(scalars[X_COMMAND], _target(parameters, scalars)),
@@ -319,6 +359,8 @@ def control_step(parameters, scalars, plateau, streak, phase):
             # the lift is watched from its start (a friction below the prior slides it), the total from the probe
             scalars[X_WATCHING] = 1.0 if phase == LIFT else 0.0
             _start_watch(scalars, plateau, streak, False)
+        if phase == PLACE:
+            scalars[X_PLACE_FORCE] = scalars[X_COMMAND]
     if phase == APPROACH:
         scalars[X_COMMAND] = parameters[P_APPROACH_FORCE]
         _latch_minimum(scalars)
@@ -340,6 +382,11 @@ def control_step(parameters, scalars, plateau, streak, phase):
         target = _first_max(_target(parameters, scalars), scalars[X_MINIMUM])
         if scalars[X_LIFT_TEST] == LIFT_STEPPED:                         # the lift's test holds its step
             target = _first_max(target, scalars[X_LIFT_HOLD])
+        if phase == PLACE:
+            # placing never asks more than holding did: the table takes the load. A load that grows now is the
+            # table's push on an object that slid down in the grasp and met it early - the fingers slide along it
+            # and carry mu of any grip - not a load to hold (chased, it drove the grip to the actuator's limit)
+            target = _first_min(target, scalars[X_PLACE_FORCE])
         target = _first_min(target, parameters[P_MAXIMUM_FORCE])
         rate = parameters[P_LOOP_RATE] if target > scalars[X_COMMAND] else parameters[P_RELEASE_LOOP_RATE]
         scalars[X_COMMAND] += rate * period * (target - scalars[X_COMMAND])
