@@ -319,9 +319,12 @@ def test_a_lift_that_slides_just_above_the_lifts_level_is_seen_and_gripped_at_on
     seen = controller.slip_events[0][0]
     slid = [time for time, _, gross in log if gross]
     assert seen < 0.6                                      # a window to settle, one to test, confirm frames
-    assert slid[0] < seen and slid[-1] < seen + 0.33
+    # the slide ends within 0.15 s of the slip seen: twice the 0.07 s measured, half the 0.28 s of the growth that
+    # stopped when nu dipped below mu_hat
+    assert slid[0] < seen and slid[-1] < seen + 0.15
     minimum = TIP.minimum_normal_force((0.0, 1.0), 0.0, 0.32)
-    assert minimum < log[-1][1] < 1.5 * minimum
+    grips = np.array([grip for _, grip, _ in log])
+    assert grips.max() < 1.5 * minimum and minimum < grips[-1] < 1.5 * minimum
 
 
 def test_a_held_load_that_comes_on_in_two_stages_is_not_taken_for_slip():
@@ -384,7 +387,7 @@ def test_an_array_that_slid_in_the_lift_is_gripped_until_it_stops_sliding(bias):
     with its growing grip still slides, at its limit whatever it reads: the grip grows at the loop's rate (7/s from
     the step-up of 1/s^2) and stops when nu falls with it. Measured: the slide ends 0.22 s after the slip is seen,
     the grip peaks at 1.38x (bias 0) and 1.25x (0.05) the slip limit - without the latch that keeps the slow window's
-    verdict from overruling the fast one's 'held': 2.3x and 2.2x - and settles within 1.2x."""
+    verdict from overruling the fast one's 'held': 2.3x and 2.2x - and settles at 1.19x and 1.08x."""
     plant = GripScaledSensorPlant((0.0, 2.0), 0.0, 0.2, bias=bias, reference=0.5, cap=50.0)
     controller, log = _lift(plant, 0.5, 300)
     assert controller.slip_seen
@@ -404,7 +407,7 @@ def test_a_load_that_follows_the_grip_while_placing_does_not_drive_it_up():
     and the fingers slide along it, carrying mu of any grip - a load that follows the grip, as in a lift's slide. The
     law before chased it (here 3 -> 10.6 N in 2 s; an eclair at mu 0.26 on a tuning draw, 8.5 -> 26.5 N: crushed while
     being put down). Placing never needs more grip than holding did (the table takes the load), so the demand stays
-    at or below the hold's command."""
+    at or below the command the place began with (in a grasp, the hold's)."""
     plant = QuasiStaticPlant((0.0, 50.0), 0.0, 0.3)          # far past the limit at any grip: every bump slides
     controller = IncipientSlipController(IncipientSlipParameters(), TIP.centres, SAME_FRAME)
     controller.minimum_force, controller.command = 0.5, 3.0
