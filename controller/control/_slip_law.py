@@ -105,6 +105,21 @@ def _ema(value, target, gain):
 
 
 @njit_cached
+def _load_follows_grip(parameters, now_use, now_grip, then_use, then_grip):
+    """Did the carried load follow the grip, from the utilisation nu and the grip now and at a reference: 1 if the
+    grip grew and nu did not fall with it (sliding: the load follows the grip and nu stays), 0 if nu fell with it
+    (held: the load stays and nu falls like 1 / P), judged halfway between with no margin towards 'held' (a sliding
+    array whose read nu moved with the grip was called held inside a margin); -1 if the grip did not grow by twice
+    force_drop (no verdict). The lift test's step and the test that an array still slides after a slip."""
+    if not (then_use > 0.0 and then_grip > 0.0 and now_use > 0.0 and now_grip > 0.0):
+        return -1
+    rise = math.log(now_grip / then_grip)
+    if rise < math.log(1.0 + 2.0 * parameters[P_FORCE_DROP]):
+        return -1
+    return 1 if math.log(now_use / then_use) > -0.5 * rise else 0
+
+
+@njit_cached
 def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noise, use_spread, full, frames):
     """The lift's test of a load that does not come on (once per lift): the grip's utilisation nu has sat below the
     lift's level for a window, neither rising nor falling (a load that eases after the lift's acceleration lowers
@@ -137,34 +152,13 @@ def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noi
     elif scalars[X_LIFT_TEST] == LIFT_STEPPED:
         scalars[X_LIFT_FRAMES] += 1.0
         if scalars[X_LIFT_FRAMES] >= frames:            # judged each frame until held, or the slip is confirmed
-            rise = math.log(use_now[1] / scalars[X_LIFT_GRIP]) if use_now[1] > 0.0 else 0.0
-            follows = False                         # the carried load followed the grip: nu stayed where it was
-            if rise >= math.log(1.0 + 2.0 * parameters[P_FORCE_DROP]) and use_now[0] > 0.0:
-                change = math.log(use_now[0] / scalars[X_LIFT_USE])
-                # halfway between held (nu falls by the rise) and sliding (it stays), with no margin towards
-                # 'held': a sliding array whose read nu moved with the grip was called held inside the margin
-                follows = change > -0.5 * rise
-            if follows:
+            if _load_follows_grip(parameters, use_now[0], use_now[1], scalars[X_LIFT_USE], scalars[X_LIFT_GRIP]) > 0:
                 signature[1, count] = True
                 scalars[X_LIFT_HELD] = 0.0
             else:
                 scalars[X_LIFT_HELD] += 1.0
                 if scalars[X_LIFT_HELD] >= parameters[P_CONFIRM_FRAMES]:
                     scalars[X_LIFT_TEST] = LIFT_DONE
-
-
-@njit_cached
-def _slide_verdict(parameters, now_use, now_grip, then_use, then_grip):
-    """Does an array that slipped still slide, from its utilisation nu and grip now and some frames ago: 1 if the
-    grip grew and nu did not fall with it (sliding, the load follows the grip and nu stays; held, the load stays and
-    nu falls like 1 / P; halfway between, as the lift's test), 0 if it fell with it, -1 if the grip did not grow by
-    twice force_drop (no verdict)."""
-    if not (then_use > 0.0 and then_grip > 0.0 and now_use > 0.0 and now_grip > 0.0):
-        return -1
-    rise = math.log(now_grip / then_grip)
-    if rise < math.log(1.0 + 2.0 * parameters[P_FORCE_DROP]):
-        return -1
-    return 1 if math.log(now_use / then_use) > -0.5 * rise else 0
 
 
 @njit_cached
@@ -240,16 +234,17 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
         # scale error changes with the force)
         back = int(parameters[P_SLIDE_FRAMES])
         if written >= back:
-            then_use, then_grip = history_use[(written - back) % frames, 5], history_use[(written - back) % frames, 6]
+            row = (written - back) % frames
+            then_use, then_grip = history_use[row, 5], history_use[row, 6]
         else:
             then_use, then_grip = scalars[X_SLID_USE], scalars[X_SLID_GRIP]
-        verdict = _slide_verdict(parameters, fast_now[0], fast_now[1], then_use, then_grip)
+        verdict = _load_follows_grip(parameters, fast_now[0], fast_now[1], then_use, then_grip)
         if verdict == 0:
             scalars[X_SLID_HELD] = written
         # the slow window only once it lies after the fast one's last 'held' (across it, it would read the slide
         # before as sliding now)
         if verdict < 0 and written >= frames and written - scalars[X_SLID_HELD] >= frames:
-            verdict = _slide_verdict(parameters, use_now[0], use_now[1], use_then[0], use_then[1])
+            verdict = _load_follows_grip(parameters, use_now[0], use_now[1], use_then[0], use_then[1])
         slides = verdict > 0 if verdict >= 0 else scalars[X_USE_SLOW] >= scalars[X_FRICTION]
         scalars[X_SLIDING] = 1.0 if slides else 0.0
     # the carried wrench's reference: its largest value (and the grip's) over the last GROSS_FRAMES frames
