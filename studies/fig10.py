@@ -75,10 +75,11 @@ def run(out_dir, quick: bool = False, trials: int | None = None, processes: int 
                        "eclair_without_rotation": ("eclair", TrialSettings(
                            friction_coefficient=ECLAIR_FRICTION, hold_time=hold, seed=3,
                            rotational_slip_detection=False, sensor_plane=plane))}
-    series = {}
+    finished = {}                                    # trials finish in any order; the outputs keep the cases' order
     for index, result in run_trials([(TABLE_I_OBJECTS[name], s) for name, s in series_settings.values()],
                                     processes):
-        series[list(series_settings)[index]] = result
+        finished[list(series_settings)[index]] = result
+    series = {case: finished[case] for case in series_settings}
     rows = []
     for case, result in series.items():
         trace = result.trace
