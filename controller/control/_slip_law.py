@@ -27,7 +27,7 @@ APPROACH, GRASP, LIFT, HOLD, PLACE, RELEASE = (PHASE_CODES[phase] for phase in G
  X_PROBE_BEGUN, X_CARRY_TIME, X_RELEASING, X_RELEASE_NEED, X_RELEASE_FORCE, X_FRAMES, X_HISTORY, X_PHASE, X_GRIP,
  X_CARRY_SLIP, X_SENSED, X_COMMAND_MEAN, X_SENSED_MEAN, X_USE_SLOW, X_SENSED_SLOW, X_PROBED, X_LIFT_TEST,
  X_LIFT_FRAMES, X_LIFT_USE, X_LIFT_GRIP, X_LIFT_HOLD, X_LIFT_HELD, X_SLID_USE, X_SLID_GRIP, X_SLIDING,
- X_SLID_HELD, X_PLACE_FORCE, X_SIZE) = range(38)
+ X_SLID_HELD, X_PLACE_FORCE, X_VISIBLE, X_SIZE) = range(39)
 # --- parameter slots --------------------------------------------------------------------------------------------
 (P_PERIOD, P_FAST_GAIN, P_SLOW_GAIN, P_APPROACH_FORCE, P_RAMP_RATE, P_MAXIMUM_FORCE, P_LOOP_RATE,
  P_RELEASE_LOOP_RATE, P_SAFETY, P_LIFT_SAFETY, P_PRIOR_FRICTION, P_MAXIMUM_FRICTION, P_PROBE_RATE, P_PROBE_DELAY,
@@ -47,6 +47,9 @@ LIFT_STEP = 0.5
 # alike, 0.5 one drop more)
 LIFT_GROWTH = 0.3
 LIFT_UNTRIED, LIFT_STEPPED, LIFT_DONE = 0.0, 1.0, 2.0
+# the probe starts only where some fingertip has this many bumps its test can see slide (``_visible_bumps``): the bump
+# test confirms a slip at two bumps of one fingertip
+BLIND_BELOW = 2
 # what ``observe_frame`` saw: nothing, a single bump sliding, the grasp's carried load falling with its grip (gross
 # slip), the array's utilisation staying put while its grip fell (the array sliding as a whole)
 NO_SLIP, BUMP_SLIP, GROSS_SLIP, ARRAY_SLIP = range(4)
@@ -274,6 +277,7 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
         use_noise, use_mode,
         parameters[P_LIFT_SAFETY] * scalars[X_FRICTION],
         parameters[P_STALL_RISE], parameters[P_STALL_FRACTION])
+    scalars[X_VISIBLE] = _visible_bumps(parameters, signals[SLOW], magnitudes, contact, noise)
     if not seen and (scalars[X_PHASE] == LIFT or scalars[X_LIFT_TEST] == LIFT_STEPPED):
         # nu's spread over the window (largest less smallest, this frame's included), for a test yet to start
         low = high = use_now[0]
@@ -329,6 +333,32 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
     scalars[X_COMMAND] = _first_min(step_up, parameters[P_MAXIMUM_FORCE])
     _start_watch(scalars, plateau, streak, True)
     return BUMP_SLIP if index < count else (GROSS_SLIP if finger == 0 else ARRAY_SLIP)
+
+
+@njit_cached
+def _visible_bumps(parameters, force, magnitudes, contact, noise):
+    """The most bumps of one fingertip whose probe test can see them slide: of the bumps it watches, those whose
+    noise margin lies below the gap the probe opens over a window between a stuck bump's ratio and a sliding one's
+    (|rho_i| (exp(stick_exponent probe_rate window) - 1): noise over |rho_i| is that of the bump's tangential load,
+    the same however far the grip falls)."""
+    gap = math.exp(parameters[P_STICK_EXPONENT] * parameters[P_PROBE_RATE] * parameters[P_WATCH_TIME]) - 1.0
+    best = 0
+    for f in range(2):
+        largest = mean = 0.0
+        contacts = 0
+        for i in range(force.shape[1]):
+            if contact[f, i]:
+                contacts += 1
+                mean += force[f, i]
+                largest = _first_max(largest, magnitudes[f, i])
+        mean /= max(contacts, 1)
+        visible = 0
+        for i in range(force.shape[1]):
+            if (contact[f, i] and magnitudes[f, i] >= parameters[P_LOADED_SHARE] * largest
+                    and force[f, i] >= parameters[P_FORCE_SHARE] * mean and noise[f, i] <= gap * magnitudes[f, i]):
+                visible += 1
+        best = max(best, visible)
+    return best
 
 
 @njit_cached
@@ -400,7 +430,10 @@ def _carry_step(parameters, scalars, plateau, streak, period):
         return
     if scalars[X_PROBE_BEGUN] == 0.0:
         scalars[X_PROBE_BEGUN] = 1.0
-        scalars[X_PROBING] = 0.0 if scalars[X_CARRY_SLIP] > 0.0 else 1.0
+        # a probe whose bump test cannot see a bump slide does not start (without rotational detection the bump test
+        # is not used: that probe watches the total alone)
+        blind = parameters[P_ROTATIONAL] > 0.0 and scalars[X_VISIBLE] < BLIND_BELOW
+        scalars[X_PROBING] = 0.0 if scalars[X_CARRY_SLIP] > 0.0 or blind else 1.0
         if scalars[X_PROBING] > 0.0:        # the probe's margin is the hold's: mu_hat starts where the grip is
             scalars[X_FRICTION] *= parameters[P_LIFT_SAFETY] / parameters[P_SAFETY]
             scalars[X_PROBED] = 0.0
