@@ -50,9 +50,13 @@ def test_light_object_is_lifted_and_held_without_creep():
     # test could not see a bump slide and the probe is not started - held at the lift's grip (measured 2.9x the
     # limit), the friction not measured (mu_hat stays the prior)
     controlled = run_trial(box, TrialSettings(friction_coefficient=0.8, place=False))
-    assert controlled.success and controlled.hold_force_settled > needed and controlled.hold_slip_mm < 1.0
-    prior = IncipientSlipParameters().prior_friction
-    assert not controlled.slip_events and controlled.friction_estimate == pytest.approx(prior)
+    assert controlled.success and controlled.hold_slip_mm < 1.0
+    law = IncipientSlipParameters()
+    assert not controlled.slip_events and controlled.friction_estimate == pytest.approx(law.prior_friction)
+    # the lift's margin at the prior: mu / (s_lift mu_prior) = 2.86x the limit, within the estimator's force and
+    # load-ratio errors through the sensor (3.8 % and 0.025, held-out bench) and its demand model's: 10 %
+    lift_level = 0.8 / (law.lift_safety_fraction * law.prior_friction)
+    assert controlled.hold_force_settled / needed == pytest.approx(lift_level, rel=0.1)
     # 0.3 kg: the probe runs, lowers the grip to the first slip and settles above the limit - held, after a slide
     # shorter than a bump's contact radius (~1 mm) before the grip steps up (measured 0.29 mm)
     heavier = GraspObject("box", 0.3, (0.06, 0.05, 0.08), 0.0, 0.04)

@@ -422,13 +422,14 @@ def test_a_load_that_follows_the_grip_while_placing_does_not_drive_it_up():
 
 
 @pytest.mark.parametrize("noise, probes", [(0.005, True), (0.2, False)])
-def test_a_probe_whose_test_cannot_see_a_bump_slide_does_not_start(noise, probes):
+def test_a_probe_whose_bump_test_cannot_be_relied_on_does_not_start(noise, probes):
     """The probe lowers the grip until two bumps of a fingertip are seen sliding: a sliding bump's ratio stays flat
     while its force falls, a stuck one's rises at least like P^-2/3. Over a window the probe opens a gap of
     |rho_i| (exp(stick_exponent probe_rate window) - 1) = 4.6 % of |rho_i| between the two; where every loaded bump's
     noise margin exceeds it (a light object: small tangential loads per bump against the sensor's noise), no bump can
-    be seen sliding, and the probe ran on through incipient slip into gross slip (here: seen by the array test at
-    4.2 s; an eclair at mu 0.6 on a tuning draw turned 200 mrad before the grasp's total showed it). Such a probe
+    be relied on to be seen sliding, and the probe ran on through incipient slip into gross slip (here: seen by the
+    array test at 4.2 s; an eclair at mu 0.6 on a tuning draw had turned 130 mrad when the grasp's total showed it,
+    199 mrad in all). Such a probe
     does not start: the grip stays at the lift's level, mu_hat at the prior. With a quiet sensor the same grasp is
     probed and its friction found."""
     from controller.control.filters import tustin_gain
@@ -460,3 +461,39 @@ def test_a_probe_whose_test_cannot_see_a_bump_slide_does_not_start(noise, probes
         assert not any(gross for _, _, gross in log)
         assert controller.friction_estimate == parameters.prior_friction
         assert log[-1][1] == pytest.approx(log[150][1], rel=0.02)            # the grip stayed where the lift left it
+
+
+def test_the_visible_bumps_are_those_whose_noise_margin_lies_below_the_probes_gap():
+    """``_visible_bumps`` counts, per fingertip, the watched bumps (ratio at least loaded_share of the largest, force at
+    least force_share of the mean) whose noise margin lies below |rho_i| (exp(stick_exponent probe_rate window) - 1),
+    and returns the larger count: 2 % either side of the gap decides, an unwatched bump never counts."""
+    from controller.control._slip_law import BLIND_BELOW, _visible_bumps
+    from controller.control.incipient_slip import law_parameters
+
+    parameters = IncipientSlipParameters()
+    law = law_parameters(parameters, TIP.centres)
+    gap = math.exp(parameters.stick_exponent * parameters.probe_rate * parameters.watch_frames / 100.0) - 1.0
+    count = len(TIP.centres)
+    force, magnitudes = np.ones((2, count)), np.full((2, count), 0.5)
+    contact = np.ones((2, count), dtype=bool)
+    above = np.full((2, count), 1.02 * gap * 0.5)                      # every bump's margin just above the gap
+    assert _visible_bumps(law, force, magnitudes, contact, above) == 0
+    one = above.copy()
+    one[1, 3] = 0.98 * gap * 0.5
+    assert _visible_bumps(law, force, magnitudes, contact, one) == 1 < BLIND_BELOW
+    two = one.copy()
+    two[1, 5] = 0.98 * gap * 0.5
+    assert _visible_bumps(law, force, magnitudes, contact, two) == 2 == BLIND_BELOW
+    # a quiet bump the test does not watch: its ratio below loaded_share of the largest, or its force below
+    # force_share of the mean, or out of contact
+    for change in ("ratio", "force", "contact"):
+        three = two.copy()
+        three[1, 7] = 0.0
+        m, f, c = magnitudes.copy(), force.copy(), contact.copy()
+        if change == "ratio":
+            m[1, 7] = 0.9 * parameters.loaded_share * 0.5
+        elif change == "force":
+            f[1, 7] = 0.9 * parameters.force_share * f[1].mean()
+        else:
+            c[1, 7] = False
+        assert _visible_bumps(law, f, m, c, three) == 2

@@ -337,10 +337,10 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
 
 @njit_cached
 def _visible_bumps(parameters, force, magnitudes, contact, noise):
-    """The most bumps of one fingertip whose probe test can see them slide: of the bumps it watches, those whose
-    noise margin lies below the gap the probe opens over a window between a stuck bump's ratio and a sliding one's
-    (|rho_i| (exp(stick_exponent probe_rate window) - 1): noise over |rho_i| is that of the bump's tangential load,
-    the same however far the grip falls)."""
+    """The most bumps of one fingertip that the probe's bump test can be relied on to see slide: of the bumps it
+    watches, those whose noise margin lies below the gap the probe opens over a window between a stuck bump's ratio
+    and a sliding one's (|rho_i| (exp(stick_exponent probe_rate window) - 1): noise over |rho_i| is that of the
+    bump's tangential load, which the falling grip does not change while the loads stay where they are)."""
     gap = math.exp(parameters[P_STICK_EXPONENT] * parameters[P_PROBE_RATE] * parameters[P_WATCH_TIME]) - 1.0
     best = 0
     for f in range(2):
@@ -430,8 +430,8 @@ def _carry_step(parameters, scalars, plateau, streak, period):
         return
     if scalars[X_PROBE_BEGUN] == 0.0:
         scalars[X_PROBE_BEGUN] = 1.0
-        # a probe whose bump test cannot see a bump slide does not start (without rotational detection the bump test
-        # is not used: that probe watches the total alone)
+        # a probe whose bump test cannot be relied on to see a bump slide does not start (without rotational detection
+        # the bump test is not used: that probe watches the total alone)
         blind = parameters[P_ROTATIONAL] > 0.0 and scalars[X_VISIBLE] < BLIND_BELOW
         scalars[X_PROBING] = 0.0 if scalars[X_CARRY_SLIP] > 0.0 or blind else 1.0
         if scalars[X_PROBING] > 0.0:        # the probe's margin is the hold's: mu_hat starts where the grip is

@@ -37,13 +37,14 @@ fall by ``total_drop`` together with the normal force is the grasp sliding as a 
 then on their limit: mu_hat is their ratio). After the probe the total load is still watched: a gross slip seen
 later (the load grew, or mu_hat was too high) lowers mu_hat and steps the grip up again. Single bumps are judged
 only while the grip is probed down: at a held grip a bump's force changes only as the normal forces redistribute,
-not as the controller asks. A probe that cannot see a bump slide does not start: over a window it opens a gap of
-|rho_i| (exp(``stick_exponent`` ``probe_rate`` window) - 1) between a stuck bump's ratio and a sliding one's; where
-neither fingertip has two watched bumps whose noise margin lies below that gap (a light object: small
-tangential loads per bump against the sensor's noise; noise over |rho_i| does not change as the grip falls), the
-probe would run on through incipient slip until the grasp slid as a whole. The grip then stays where the lift left
-it, at mu_hat = ``prior_friction`` with the lift's margin - the safe side: more grip, the friction not measured.
-(Without rotational detection the bump test is not used; that probe starts as before and watches the total alone.)
+not as the controller asks. A probe whose bump test cannot be relied on to see a bump slide does not start: over a
+window the probe opens a gap of |rho_i| (exp(``stick_exponent`` ``probe_rate`` window) - 1) between a stuck bump's
+ratio and a sliding one's; where neither fingertip has two watched bumps whose noise margin lies below that gap (a
+light object: small tangential loads per bump against the sensor's noise), a sliding bump is flagged only if its read
+ratio happens to fall as the loads shift, and where it was not, the probe ran on through incipient slip until the
+grasp slid as a whole. The grip then stays where the lift left it, at mu_hat = ``prior_friction`` with the lift's
+margin: more grip, the friction not measured (docs/design.md, sec. 12). Without rotational detection the bump test is
+not used; that probe starts as before and watches the total alone.
 
 Lift test (once per lift, before any slip was seen). Below the lift's level (mu_hat x ``lift_safety_fraction``)
 sliding bumps carry only mu of the grip, so the demand never asks for more and the grip stays where it is - at the
