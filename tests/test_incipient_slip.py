@@ -429,9 +429,8 @@ def test_a_probe_whose_bump_test_cannot_be_relied_on_does_not_start(noise, probe
     noise margin exceeds it (a light object: small tangential loads per bump against the sensor's noise), no bump can
     be relied on to be seen sliding, and the probe ran on through incipient slip into gross slip (here: seen by the
     array test at 4.2 s; an eclair at mu 0.6 on a tuning draw had turned 130 mrad when the grasp's total showed it,
-    199 mrad in all). Such a probe
-    does not start: the grip stays at the lift's level, mu_hat at the prior. With a quiet sensor the same grasp is
-    probed and its friction found."""
+    199 mrad in all). Such a probe does not start: the grip stays at the lift's level, mu_hat at the prior. With a
+    quiet sensor the same grasp is probed and its friction found."""
     from controller.control.filters import tustin_gain
     from controller.control.incipient_slip import NOISE_MARGIN
 
@@ -465,8 +464,15 @@ def test_a_probe_whose_bump_test_cannot_be_relied_on_does_not_start(noise, probe
 
 def test_the_visible_bumps_are_those_whose_noise_margin_lies_below_the_probes_gap():
     """``_visible_bumps`` counts, per fingertip, the watched bumps (ratio at least loaded_share of the largest, force at
-    least force_share of the mean) whose noise margin lies below |rho_i| (exp(stick_exponent probe_rate window) - 1),
-    and returns the larger count: 2 % either side of the gap decides, an unwatched bump never counts."""
+    least force_share of the mean, in contact) whose noise margin lies below |rho_i| (exp(stick_exponent probe_rate
+    window) - 1), and returns the larger count: 2 % either side of the gap decides, an unwatched bump never counts."""
+
+    def visible(force, magnitudes, contact, noise):
+        # the references slip_signature hands it: the largest |rho_i| in contact, the bump forces' sum over contacts
+        largest = np.where(contact, magnitudes, 0.0).max(axis=1)
+        mean = force.sum(axis=1) / np.maximum(contact.sum(axis=1), 1)
+        return _visible_bumps(law, force, magnitudes, contact, noise, largest, mean)
+
     from controller.control._slip_law import BLIND_BELOW, _visible_bumps
     from controller.control.incipient_slip import law_parameters
 
@@ -477,13 +483,13 @@ def test_the_visible_bumps_are_those_whose_noise_margin_lies_below_the_probes_ga
     force, magnitudes = np.ones((2, count)), np.full((2, count), 0.5)
     contact = np.ones((2, count), dtype=bool)
     above = np.full((2, count), 1.02 * gap * 0.5)                      # every bump's margin just above the gap
-    assert _visible_bumps(law, force, magnitudes, contact, above) == 0
+    assert visible(force, magnitudes, contact, above) == 0
     one = above.copy()
     one[1, 3] = 0.98 * gap * 0.5
-    assert _visible_bumps(law, force, magnitudes, contact, one) == 1 < BLIND_BELOW
+    assert visible(force, magnitudes, contact, one) == 1 < BLIND_BELOW
     two = one.copy()
     two[1, 5] = 0.98 * gap * 0.5
-    assert _visible_bumps(law, force, magnitudes, contact, two) == 2 == BLIND_BELOW
+    assert visible(force, magnitudes, contact, two) == 2 == BLIND_BELOW
     # a quiet bump the test does not watch: its ratio below loaded_share of the largest, or its force below
     # force_share of the mean, or out of contact
     for change in ("ratio", "force", "contact"):
@@ -496,4 +502,4 @@ def test_the_visible_bumps_are_those_whose_noise_margin_lies_below_the_probes_ga
             f[1, 7] = 0.9 * parameters.force_share * f[1].mean()
         else:
             c[1, 7] = False
-        assert _visible_bumps(law, f, m, c, three) == 2
+        assert visible(f, m, c, three) == 2

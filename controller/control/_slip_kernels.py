@@ -145,7 +145,8 @@ def slip_signature(force, ratio, fast_force, fast_ratio, contact, centres, force
     """The slip watch's tests on one frame (the module docstring).
 
     Returns signature (2, k + 1) bool (per bump, and the grasp's gross slip in [0, k]), the total ratio (a sliding
-    fingertip's |sum q| / sum P), the largest ratio of the bearing bumps and |rho_i| (2, k).
+    fingertip's |sum q| / sum P), the largest ratio of the bearing bumps, |rho_i| (2, k) and, per fingertip (2,), the
+    largest |rho_i| in contact and the mean bump force [N] (``watched``'s references).
 
     Bumps (slowly filtered ``force``, ``ratio``) are judged only when ``judged``, against the frame
     ``watch_frames`` ago (force_then, ratios_then): a bump whose force fell by ``force_drop`` while its ratio rose
@@ -213,14 +214,21 @@ def slip_signature(force, ratio, fast_force, fast_ratio, contact, centres, force
     if judged:
         for f in range(2):
             for i in range(count):
-                if not (contact[f, i] and ratios_then[f, i] > 0.0 and force_then[f, i] > 0.0
-                        and ratios[f, i] > hold_ratio and ratios[f, i] >= loaded_share * largest[f]
-                        and force[f, i] >= force_share * mean_force[f]):
+                if not (watched(contact[f, i], ratios[f, i], force[f, i], largest[f], mean_force[f], loaded_share,
+                                force_share)
+                        and ratios_then[f, i] > 0.0 and force_then[f, i] > 0.0 and ratios[f, i] > hold_ratio):
                     continue
                 fallen = force[f, i] / force_then[f, i]
                 signature[f, i] = fallen <= 1.0 - force_drop and \
                     ratios[f, i] + noise[f, i] <= ratios_then[f, i] * fallen ** (-stick_exponent)
-    return signature, total_ratio, bearing, ratios
+    return signature, total_ratio, bearing, ratios, largest, mean_force
+
+
+@njit_cached(inline="always")
+def watched(in_contact, ratio, force, largest, mean_force, loaded_share, force_share):
+    """Is a bump one the slip watch judges: in contact, its |rho_i| at least ``loaded_share`` of its fingertip's
+    largest and its force at least ``force_share`` of the fingertip's mean (``slip_signature``'s references)."""
+    return in_contact and ratio >= loaded_share * largest and force >= force_share * mean_force
 
 
 @njit_cached

@@ -14,7 +14,7 @@ import math
 import numpy as np
 from fem.compiled import njit_cached
 
-from ._slip_kernels import fingertip_need, low_pass_frame, slip_signature
+from ._slip_kernels import fingertip_need, low_pass_frame, slip_signature, watched
 from .references import GraspPhase
 
 __all__ = ["observe_frame", "control_step", "PHASE_CODES", "SLIP_KINDS"]
@@ -266,7 +266,7 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
                and scalars[X_COMMAND] < SATURATED * parameters[P_MAXIMUM_FORCE])
     use_mode = 1 if probed else (2 if lifting and parameters[P_STALL_FRACTION] > 0.0 else 0)
     use_noise = math.sqrt(2.0 * parameters[P_SLOW_GAIN]) * wrench_noise / max(sensed, 1e-9)
-    signature, total_ratio, bearing, magnitudes = slip_signature(
+    signature, total_ratio, bearing, magnitudes, largest, mean_force = slip_signature(
         signals[SLOW], ratios[SLOW], signals[FAST], ratios[FAST], contact, centres, history_force[oldest],
         history_ratios[oldest], judged, watch_total, reference, carried, second_frame, hold_ratio,
         parameters[P_TOTAL_DROP],
@@ -277,7 +277,8 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
         use_noise, use_mode,
         parameters[P_LIFT_SAFETY] * scalars[X_FRICTION],
         parameters[P_STALL_RISE], parameters[P_STALL_FRACTION])
-    scalars[X_VISIBLE] = _visible_bumps(parameters, signals[SLOW], magnitudes, contact, noise)
+    if scalars[X_PROBE_BEGUN] == 0.0:                 # read once, when the probe begins (_carry_step)
+        scalars[X_VISIBLE] = _visible_bumps(parameters, signals[SLOW], magnitudes, contact, noise, largest, mean_force)
     if not seen and (scalars[X_PHASE] == LIFT or scalars[X_LIFT_TEST] == LIFT_STEPPED):
         # nu's spread over the window (largest less smallest, this frame's included), for a test yet to start
         low = high = use_now[0]
@@ -336,26 +337,20 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
 
 
 @njit_cached
-def _visible_bumps(parameters, force, magnitudes, contact, noise):
+def _visible_bumps(parameters, force, magnitudes, contact, noise, largest, mean_force):
     """The most bumps of one fingertip that the probe's bump test can be relied on to see slide: of the bumps it
-    watches, those whose noise margin lies below the gap the probe opens over a window between a stuck bump's ratio
-    and a sliding one's (|rho_i| (exp(stick_exponent probe_rate window) - 1): noise over |rho_i| is that of the
-    bump's tangential load, which the falling grip does not change while the loads stay where they are)."""
+    watches (``watched``, on ``slip_signature``'s references ``largest`` and ``mean_force``), those whose noise margin
+    lies below the gap the probe opens over a window between a stuck bump's ratio and a sliding one's
+    (|rho_i| (exp(stick_exponent probe_rate window) - 1): noise over |rho_i| is that of the bump's tangential load,
+    which the falling grip does not change while the loads stay where they are)."""
     gap = math.exp(parameters[P_STICK_EXPONENT] * parameters[P_PROBE_RATE] * parameters[P_WATCH_TIME]) - 1.0
     best = 0
     for f in range(2):
-        largest = mean = 0.0
-        contacts = 0
-        for i in range(force.shape[1]):
-            if contact[f, i]:
-                contacts += 1
-                mean += force[f, i]
-                largest = _first_max(largest, magnitudes[f, i])
-        mean /= max(contacts, 1)
         visible = 0
         for i in range(force.shape[1]):
-            if (contact[f, i] and magnitudes[f, i] >= parameters[P_LOADED_SHARE] * largest
-                    and force[f, i] >= parameters[P_FORCE_SHARE] * mean and noise[f, i] <= gap * magnitudes[f, i]):
+            if (watched(contact[f, i], magnitudes[f, i], force[f, i], largest[f], mean_force[f],
+                        parameters[P_LOADED_SHARE], parameters[P_FORCE_SHARE])
+                    and noise[f, i] <= gap * magnitudes[f, i]):
                 visible += 1
         best = max(best, visible)
     return best
