@@ -1,18 +1,18 @@
 """Table I (closed loop, MuJoCo): grasp success rate and grasp force for the bottle (upright, horizontal) and eclair.
 
 Each trial runs the paper's sequence - grasp on the table, lift 50 mm, hold 4 s, place, release - with the
-incipient-slip controller (controller.control.incipient_slip) against a plant it does not know: the FEM's sensor
-plane read by capacitive nodes, every plant factor (kernel width, couple arm, gel E, bump height, node gain,
-friction anisotropy) drawn within +-10 % (``--plant-spread``, ``--plant``), while the estimator was calibrated on a
-nominal build's bench. Randomised: friction mu in [0.2, 1.2] (beyond the controller's prior, 0.4, on both sides),
-grasp position (+-5 mm along the object, +-1 mm in height), object misalignment (+-1 deg), sensor noise (0.5-2 mN
-per node); the draws come from the held-out seed (``HELD_OUT_SEED``), none of them seen while the law was tuned.
-The controller knows neither mass, moment nor mu. Outcomes (the worst that happened): crushed (a finger's force
-exceeded the object's crush force; the eclair's is 10 N), dropped (the object touched the table in the hold),
-turned out of the grasp (more than 0.15 rad), else held; success means held. A trial whose own slip limit lies
-above the crush force cannot be held by any grip ("infeasible": the eclair at mu below about 0.23); the rate is
-given over all trials and over the feasible ones. The success rate comes with its 95 % Wilson interval: 30 trials
-that all succeed bound the failure rate below 11 %, 10 below 28 %.
+incipient-slip controller (controller.control.incipient_slip) against a plant it does not know: the FEM's sensor plane
+read by capacitive nodes, every plant factor (kernel width, couple arm, gel E, bump height, node gain, friction
+anisotropy) drawn within +-10 % (``--plant-spread``, ``--plant``), while the estimator was calibrated on a nominal
+build's bench. Randomised: friction mu in [0.2, 1.2] (beyond the controller's prior, 0.4, on both sides), grasp position
+(+-5 mm along the object, +-1 mm in height), object misalignment (+-1 deg), sensor noise (0.5-2 mN per node); the draws
+come from the held-out seed (``HELD_OUT_SEED``), none of them seen while the law was tuned. The controller knows neither
+mass, moment nor mu. Outcomes (the worst that happened): crushed (a finger's force exceeded the object's crush force;
+the eclair's is 10 N), dropped (the object touched the table in the hold), turned out of the grasp (more than 0.15 rad),
+else held; success means held. A trial whose own slip limit lies above the crush force cannot be held by any grip
+("infeasible"; none in 0.2-1.2: the eclair's slip limit at mu 0.2 is 7.3 N against its 10 N crush force); the rate is
+given over all trials and over the feasible ones. The success rate comes with its 95 % Wilson interval: 30 trials that
+all succeed bound the failure rate below 11 %, 10 below 28 %.
 Outputs: table1.csv (one row per trial, written as each finishes; a re-run skips the trials already there),
 table1_summary.json, table1.png/pdf.
 """
