@@ -88,9 +88,9 @@ def test_fig10_quick_counts_outcomes_apart(tmp_path):
 
 @pytest.mark.parametrize("trials", [0, 1.5, True])
 def test_closed_loop_studies_refuse_bad_trial_counts(tmp_path, trials):
-    from studies import fig10, fig11, robustness, table1
+    from studies import fig10, fig11, robustness, table1, tuning
 
-    for study in (table1, fig10, fig11, robustness):
+    for study in (table1, fig10, fig11, robustness, tuning):
         with pytest.raises(ValueError, match=f"trials={trials!r} must be an integer >= 1"):
             study.run(tmp_path, quick=True, trials=trials)
 
@@ -162,3 +162,37 @@ def test_robustness_target_is_decided_only_by_30_trials_at_every_factors_15_perc
     assert decide(summary(robustness.LEVELS)) is None                   # no +-15 % cell: a screen
     assert decide(summary((-0.2, 0.2))) is None                          # quick
     assert decide(summary(robustness.FULL_LEVELS, trials=4, held=4)) is None
+
+
+def test_tuning_sets_draw_apart_from_the_held_out_seed_and_as_declared():
+    """Each tuning set draws from TUNING_SEED + its offset: never the held-out seed's stream (the protocol's disjoint,
+    declared seeds), the same draws as ``random_settings`` on that stream, with friction in the set's range."""
+    import numpy as np
+
+    from controller.closed_loop import HELD_OUT_SEED, TUNING_SEED, random_settings
+    from studies.tuning import SETS, subject
+
+    assert len({entry.name for entry in SETS}) == len(SETS)
+    for entry in SETS:
+        assert TUNING_SEED + entry.offset != HELD_OUT_SEED
+        low, high = entry.friction
+        assert 0.2 <= low < high <= 1.2
+        first = random_settings(np.random.default_rng(TUNING_SEED + entry.offset), friction_range=entry.friction)
+        assert low <= first.friction_coefficient <= high
+        obj = subject(entry.subject)
+        assert obj.mass > 0.0 and (entry.subject.startswith("box:") or obj.name == entry.subject)
+
+
+def test_tuning_runs_a_chosen_set_and_refuses_unknown_ones(tmp_path):
+    from controller.closed_loop import OUTCOMES
+    from studies import tuning
+
+    with pytest.raises(ValueError, match=r"unknown \['teapot'\]; allowed: \['eclair_mu_above_0.45'"):
+        tuning.run(tmp_path, sets=["eclair", "teapot"])
+    summary = tuning.run(tmp_path, sets=["box_0.15kg_0mm"], trials=1, processes=1)
+    rows = _rows(tmp_path / "tuning.csv")
+    assert len(rows) == 1 and rows[0]["set"] == "box_0.15kg_0mm" and rows[0]["outcome"] in OUTCOMES
+    sets = _rows(tmp_path / "tuning_summary.csv")
+    assert [row["set"] for row in sets] == ["box_0.15kg_0mm"] and int(sets[0]["trials"]) == 1
+    assert summary["trials"] == 1 and summary["held"] == int(sets[0]["held"])
+    assert (tmp_path / "tuning.png").is_file()
