@@ -25,6 +25,7 @@ from studies._trials import (add_plant_arguments, check_trials, outcome_columns,
 
 NAME = "fig11"
 SIZE = (0.200, 0.070, 0.070)          # m, the horizontal bottle
+GRASP_HEIGHT = 0.035                  # m, the fingertip centre above the table
 TRIALS = 3
 RESOLUTION = 0.02                     # tau_min bisection to 2 %
 BRACKET_FACTOR = 1.25                 # the bracket search steps from the controller's own grip by this factor
@@ -80,7 +81,7 @@ def run(out_dir, quick: bool = False, trials: int | None = None, processes: int 
     rng = np.random.default_rng(HELD_OUT_SEED + 11)
     jobs = []
     for mass, lever in cases(quick):
-        obj = GraspObject(f"box_{mass:g}kg_{1e3 * lever:g}mm", mass, SIZE, lever, 0.035)
+        obj = GraspObject(f"box_{mass:g}kg_{1e3 * lever:g}mm", mass, SIZE, lever, GRASP_HEIGHT)
         for trial in range(trials):
             settings = trial_settings(rng, **options, place=False, hold_time=4.0)
             info = dict(case=obj.name, trial=trial, mass=mass, lever=lever)
