@@ -96,7 +96,8 @@ def jobs(sets: list[str] | None = None, trials: int | None = None, quick: bool =
         for trial in range(min(entry.trials, trials if trials is not None else (2 if quick else entry.trials))):
             settings = random_settings(rng, friction_range=entry.friction, **fixed)
             info = {"set": entry.name, "trial": trial, "crush_force": obj.crush_force}
-            out.append((trial_key(obj, settings, "tuning"), obj, settings, info))
+            # the set in the key: a renamed set runs again rather than reading its rows back under the old name
+            out.append((trial_key(obj, settings, f"tuning:{entry.name}"), obj, settings, info))
     return out
 
 
