@@ -201,6 +201,16 @@ def trial_settings(rng, plant_spread: float, plant=None, sensor_plane="fem", **f
     return replace(settings, sensor_plane=sensor_plane)
 
 
+def trial_columns(result, info: dict) -> dict:
+    """A trial's row after its own labels: friction, ``outcome_columns``, the settled grip over the trial's slip limit
+    ``info["required"]`` [N] (what ``run_trial_table`` hands the row), the forces [N] and the real-time factor."""
+    return dict(friction_coefficient=result.settings.friction_coefficient,
+                **outcome_columns(result, info["required"], info["crush_force"]),
+                force_ratio=result.hold_force_settled / info["required"], required_force=info["required"],
+                hold_force_settled=result.hold_force_settled, max_force=result.max_force,
+                real_time_factor=result.real_time_factor)
+
+
 def outcome_columns(result, required: float, crush_force: float) -> dict:
     """The per-trial columns every closed-loop table shares: outcome, held-still measures, the friction estimate and
     whether the trial could be held at all (its slip limit below the object's crush force)."""

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from studies._output import save_figure, write_csv_atomic
-from studies._trials import check_trials, outcome_columns, run_trial_table, trial_key, trial_settings
+from studies._trials import check_trials, run_trial_table, trial_columns, trial_key, trial_settings
 
 NAME = "robustness"
 LEVELS = (-0.2, -0.1, 0.1, 0.2)
@@ -61,11 +61,7 @@ def cells(full: bool, quick: bool) -> list[dict]:
 
 def _row(result, info) -> dict:
     return dict(cell=info["cell"], factor=info["factor"], level=info["level"], object=info["object"],
-                trial=info["trial"], friction_coefficient=result.settings.friction_coefficient,
-                **outcome_columns(result, info["required"], info["crush_force"]),
-                force_ratio=result.hold_force_settled / info["required"], required_force=info["required"],
-                hold_force_settled=result.hold_force_settled, max_force=result.max_force,
-                real_time_factor=result.real_time_factor)
+                trial=info["trial"], **trial_columns(result, info))
 
 
 def run(out_dir, quick: bool = False, trials: int | None = None, full: bool = False,

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from studies._output import save_figure, write_csv_atomic
-from studies._trials import check_trials, outcome_columns, run_trial_table, trial_key
+from studies._trials import check_trials, run_trial_table, trial_columns, trial_key
 
 NAME = "tuning"
 
@@ -102,12 +102,7 @@ def jobs(sets: list[str] | None = None, trials: int | None = None, quick: bool =
 
 
 def _row(result, info) -> dict:
-    return dict(set=info["set"], object=result.object_name, trial=info["trial"],
-                friction_coefficient=result.settings.friction_coefficient,
-                **outcome_columns(result, info["required"], info["crush_force"]),
-                grip_over_limit=result.hold_force_settled / info["required"], required_force=info["required"],
-                hold_force_settled=result.hold_force_settled, max_force=result.max_force,
-                real_time_factor=result.real_time_factor)
+    return dict(set=info["set"], object=result.object_name, trial=info["trial"], **trial_columns(result, info))
 
 
 def run(out_dir, quick: bool = False, sets: list[str] | None = None, trials: int | None = None,
@@ -142,7 +137,7 @@ def summarise(rows) -> list[dict]:
         mine = [row for row in rows if row["set"] == name]
         held = [row for row in mine if row["outcome"] == "held"]
         low, high = wilson_interval(len(held), len(mine))
-        grip = np.array([row["grip_over_limit"] for row in held], dtype=float)
+        grip = np.array([row["force_ratio"] for row in held], dtype=float)
         turns = np.array([row["max_rotation_mrad"] for row in held], dtype=float)
         out.append(dict(set=name, trials=len(mine), **{outcome: sum(row["outcome"] == outcome for row in mine)
                                                        for outcome in OUTCOMES},
