@@ -9,12 +9,16 @@ sequence, the Fig. 11 boxes lift and hold 4 s. `python -m studies tuning` gives 
 its rejected changes by, for the law in this checkout. Not part of ``studies all``: it is the tuning's measure, not a
 paper figure. Per set: held / turned out / dropped / crushed, the held rate's 95 % Wilson interval, the trials whose
 friction was never measured (no slip seen), the settled grip over the trial's own slip limit, the largest turn of a
-held object. Outputs: tuning.csv (one row per trial, resumable), tuning_summary.csv (one row per set), tuning.png/pdf.
+held object, the friction estimate's error. ``--sensor-noise-scale S`` runs the same draws with every array's node noise
+times S (the law reads its noise from a rest calibration, so it follows): where the sensor, not the law, sets a limit
+(docs/design.md sec. 12). Outputs: tuning.csv (one row per trial, resumable), tuning_summary.csv (one row per set),
+tuning.png/pdf.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
@@ -57,12 +61,28 @@ SETS = (TuningSet("eclair_mu_above_0.45", 150, (0.45, 1.2), 0, "eclair"),
           for index, (mass, lever) in enumerate(((0.3, 0.025), (0.45, 0.05), (0.45, 0.025), (0.3, 0.05)))))
 
 
+# the node noise times this at most: 200 mN per node, far past any array the closed loop was built for
+NOISE_SCALE_LIMIT = 100.0
+
+
+def check_noise_scale(scale) -> float:
+    """``--sensor-noise-scale`` must be a number in (0, NOISE_SCALE_LIMIT] (not 0: the law sets its gates from the
+    noise it reads at rest, and the protocol's arrays all have some)."""
+    if (isinstance(scale, bool) or not isinstance(scale, (int, float)) or not math.isfinite(scale)
+            or not 0.0 < scale <= NOISE_SCALE_LIMIT):
+        raise ValueError(f"--sensor-noise-scale={scale!r} must be a number in (0, {NOISE_SCALE_LIMIT:g}]")
+    return float(scale)
+
+
 def add_arguments(parser) -> None:
     parser.add_argument("--sets", type=lambda text: [name for name in text.split(",") if name], default=None,
                         metavar="NAME,NAME", help=f"only these sets ({', '.join(s.name for s in SETS)})")
     parser.add_argument("--trials", type=int, default=None,
                         help="the first N trials of each set, at most the set's own (default: all; quick 2)")
     parser.add_argument("--processes", type=int, default=None, help="worker processes (default: every CPU)")
+    parser.add_argument("--sensor-noise-scale", type=float, default=1.0, metavar="S",
+                        help=f"every trial's node noise times S, the draws unchanged (default 1: the protocol's "
+                             f"0.5-2 mN; allowed (0, {NOISE_SCALE_LIMIT:g}])")
 
 
 def grasp_object(entry: TuningSet):
@@ -76,8 +96,10 @@ def grasp_object(entry: TuningSet):
     return GraspObject(f"box_{mass:g}kg_{1e3 * lever:g}mm", mass, SIZE, lever, GRASP_HEIGHT)
 
 
-def jobs(sets: list[str] | None = None, trials: int | None = None, quick: bool = False) -> list[tuple]:
-    """The chosen sets' trials as ``run_trial_table`` jobs (key, object, settings, info), in set order."""
+def jobs(sets: list[str] | None = None, trials: int | None = None, quick: bool = False,
+         sensor_noise_scale: float = 1.0) -> list[tuple]:
+    """The chosen sets' trials as ``run_trial_table`` jobs (key, object, settings, info), in set order; each trial's
+    node noise [N] times ``sensor_noise_scale`` after its draw (its key follows the settings)."""
     from controller.closed_loop import TUNING_SEED, random_settings
 
     known = [entry.name for entry in SETS]
@@ -86,6 +108,7 @@ def jobs(sets: list[str] | None = None, trials: int | None = None, quick: bool =
         raise ValueError(f"sets={sets!r}: unknown {unknown}; allowed: {known}")
     if trials is not None:
         check_trials(trials)
+    scale = check_noise_scale(sensor_noise_scale)
     out = []
     for entry in SETS:
         if sets is not None and entry.name not in sets:
@@ -95,6 +118,7 @@ def jobs(sets: list[str] | None = None, trials: int | None = None, quick: bool =
         rng = np.random.default_rng(TUNING_SEED + entry.offset)
         for trial in range(min(entry.trials, trials if trials is not None else (2 if quick else entry.trials))):
             settings = random_settings(rng, friction_range=entry.friction, **fixed)
+            settings = replace(settings, sensor_noise=settings.sensor_noise * scale)
             info = {"set": entry.name, "trial": trial, "crush_force": obj.crush_force}
             # the set in the key: a renamed set runs again rather than reading its rows back under the old name
             out.append((trial_key(obj, settings, f"tuning:{entry.name}"), obj, settings, info))
@@ -106,11 +130,12 @@ def _row(result, info) -> dict:
 
 
 def run(out_dir, quick: bool = False, sets: list[str] | None = None, trials: int | None = None,
-        processes: int | None = None) -> dict:
+        processes: int | None = None, sensor_noise_scale: float = 1.0) -> dict:
     """Every chosen set's trials (resumable), the per-set summary and the figure."""
     out_dir = Path(out_dir)
-    rows = run_trial_table(out_dir / f"{NAME}.csv", jobs(sets, trials, quick), _row, processes, label=NAME)
-    summary = summarise(rows)
+    chosen = jobs(sets, trials, quick, sensor_noise_scale)
+    rows = run_trial_table(out_dir / f"{NAME}.csv", chosen, _row, processes, label=NAME)
+    summary = summarise(rows, sensor_noise_scale)
     write_csv_atomic(out_dir / f"{NAME}_summary.csv", summary)
     for entry in summary:
         print(f"{NAME}: {entry['set']}: held {entry['held']}/{entry['trials']} (95 % Wilson interval "
@@ -118,17 +143,19 @@ def run(out_dir, quick: bool = False, sets: list[str] | None = None, trials: int
               f"out, {entry['dropped']} dropped, {entry['crushed']} crushed ({entry['infeasible']} infeasible); "
               f"{entry['no_slip_seen']} with no slip seen; settled grip {entry['grip_over_limit_mean']:.2f} x the slip "
               f"limit (max {entry['grip_over_limit_max']:.2f}); largest turn of a held object "
-              f"{entry['rotation_max_mrad']:.0f} mrad")
+              f"{entry['rotation_max_mrad']:.0f} mrad; friction read {100 * entry['friction_error_median']:+.0f} % "
+              f"at the median (lowest {100 * entry['friction_error_min']:+.0f} %)")
     held = sum(entry["held"] for entry in summary)
     print(f"{NAME}: held {held} of {len(rows)} in all")
-    save_figure(_plot(summary), out_dir, NAME)
+    save_figure(_plot(summary, sensor_noise_scale), out_dir, NAME)
     return {"max_error": 1.0 - held / len(rows), "error_meaning": "share of the tuning trials not held",
             "held": held, "trials": len(rows), "sets": summary}
 
 
-def summarise(rows) -> list[dict]:
-    """One row per set: outcomes, the held rate and its Wilson interval, trials with no slip seen, grip over the
-    slip limit [-], the largest turn of a held object [mrad]."""
+def summarise(rows, sensor_noise_scale: float = 1.0) -> list[dict]:
+    """One row per set: the node noise's scale, outcomes, the held rate and its Wilson interval, trials with no slip
+    seen, grip over the slip limit [-], the largest turn of a held object [mrad], the friction estimate's relative
+    error [-] over the trials that measured it (a slip seen): median and most negative."""
     from controller.closed_loop import OUTCOMES
     from controller.design import wilson_interval
 
@@ -139,18 +166,22 @@ def summarise(rows) -> list[dict]:
         low, high = wilson_interval(len(held), len(mine))
         grip = np.array([row["force_ratio"] for row in held], dtype=float)
         turns = np.array([row["max_rotation_mrad"] for row in held], dtype=float)
-        out.append(dict(set=name, trials=len(mine), **{outcome: sum(row["outcome"] == outcome for row in mine)
-                                                       for outcome in OUTCOMES},
+        errors = np.array([row["friction_estimate_error"] for row in mine if float(row["slips_detected"]) > 0],
+                          dtype=float)
+        counts = {outcome: sum(row["outcome"] == outcome for row in mine) for outcome in OUTCOMES}
+        out.append(dict(set=name, sensor_noise_scale=sensor_noise_scale, trials=len(mine), **counts,
                         success_rate=len(held) / len(mine), success_low=low, success_high=high,
                         infeasible=sum(not row["feasible"] for row in mine),
                         no_slip_seen=sum(row["slips_detected"] == 0 for row in mine),
                         grip_over_limit_mean=float(grip.mean()) if grip.size else float("nan"),
                         grip_over_limit_max=float(grip.max()) if grip.size else float("nan"),
-                        rotation_max_mrad=float(turns.max()) if turns.size else float("nan")))
+                        rotation_max_mrad=float(turns.max()) if turns.size else float("nan"),
+                        friction_error_median=float(np.median(errors)) if errors.size else float("nan"),
+                        friction_error_min=float(errors.min()) if errors.size else float("nan")))
     return out
 
 
-def _plot(summary):
+def _plot(summary, sensor_noise_scale: float = 1.0):
     """Outcome shares per set, stacked horizontal bars, each set's friction range and held count on its label."""
     import matplotlib.pyplot as plt
 
@@ -167,6 +198,7 @@ def _plot(summary):
     ax.invert_yaxis()
     ax.set_xlim(0.0, 1.0)
     ax.set_xlabel("share of the set's trials")
-    ax.set_title(f"tuning draws: {sum(e['held'] for e in summary)} of {sum(e['trials'] for e in summary)} held")
+    noise = "" if sensor_noise_scale == 1.0 else f", node noise x{sensor_noise_scale:g}"
+    ax.set_title(f"tuning draws{noise}: {sum(e['held'] for e in summary)} of {sum(e['trials'] for e in summary)} held")
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), fontsize=8, ncol=4, frameon=False)
     return fig

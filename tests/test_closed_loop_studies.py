@@ -2,6 +2,7 @@
 
 import csv
 import math
+from dataclasses import replace
 
 import pytest
 
@@ -188,6 +189,18 @@ def test_tuning_sets_draw_as_declared():
             low, high = entry.friction
             assert low <= settings.friction_coefficient <= high
         assert obj.name == (entry.table_object or f"box_{entry.box[0]:g}kg_{1e3 * entry.box[1]:g}mm")
+    # a quieter array: the same draws with the node noise scaled, under keys of their own
+    quiet = tuning.jobs(chosen, trials=2, sensor_noise_scale=0.1)
+    for (key, _, settings, _), (quiet_key, _, quiet_settings, _) in zip(built, quiet):
+        assert quiet_settings == replace(settings, sensor_noise=0.1 * settings.sensor_noise) and quiet_key != key
+
+
+@pytest.mark.parametrize("scale", [0.0, -1.0, math.nan, 101.0, True, "0.1"])
+def test_tuning_refuses_a_bad_noise_scale(scale):
+    from studies import tuning
+
+    with pytest.raises(ValueError, match=r"--sensor-noise-scale=.* must be a number in \(0, 100\]"):
+        tuning.jobs(["eclair"], trials=1, sensor_noise_scale=scale)
 
 
 def test_tuning_runs_a_chosen_set_resumes_and_refuses_unknown_ones(tmp_path, monkeypatch):
