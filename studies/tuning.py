@@ -140,7 +140,8 @@ def run(out_dir, quick: bool = False, sets: list[str] | None = None, trials: int
     for entry in summary:
         print(f"{NAME}: {entry['set']}: held {entry['held']}/{entry['trials']} (95 % Wilson interval "
               f"{100 * entry['success_low']:.0f}-{100 * entry['success_high']:.0f} %), {entry['turned_out']} turned "
-              f"out, {entry['dropped']} dropped, {entry['crushed']} crushed ({entry['infeasible']} infeasible); "
+              f"out, {entry['dropped']} dropped, {entry['crushed']} crushed ({entry['infeasible']} infeasible, "
+              f"{entry['beyond_actuator']} past the actuator's grip); "
               f"{entry['no_slip_seen']} with no slip seen; settled grip {entry['grip_over_limit_mean']:.2f} x the slip "
               f"limit (max {entry['grip_over_limit_max']:.2f}); largest turn of a held object "
               f"{entry['rotation_max_mrad']:.0f} mrad; friction read {100 * entry['friction_error_median']:+.0f} % "
@@ -153,11 +154,15 @@ def run(out_dir, quick: bool = False, sets: list[str] | None = None, trials: int
 
 
 def summarise(rows, sensor_noise_scale: float = 1.0) -> list[dict]:
-    """One row per set: the node noise's scale, outcomes, the held rate and its Wilson interval, trials with no slip
-    seen, grip over the slip limit [-], the largest turn of a held object [mrad], the friction estimate's relative
-    error [-] over the trials that measured it (a slip seen): median and most negative."""
-    from controller.closed_loop import OUTCOMES
+    """One row per set: the node noise's scale, outcomes, the held rate and its Wilson interval, trials past the
+    crush force (infeasible) and past the finger drive's largest grip (TORQUE_LIMIT / ARM_RADIUS: no grip the gripper
+    gives holds them), trials with no slip seen, grip over the slip limit [-], the largest turn of a held object
+    [mrad], the friction estimate's relative error [-] over the trials that measured it (a slip seen): median and most
+    negative."""
+    from controller.closed_loop import ARM_RADIUS, OUTCOMES, TORQUE_LIMIT
     from controller.design import wilson_interval
+
+    grip_limit = TORQUE_LIMIT / ARM_RADIUS              # N: the finger drive's largest grip
 
     out = []
     for name in dict.fromkeys(row["set"] for row in rows):
@@ -172,6 +177,7 @@ def summarise(rows, sensor_noise_scale: float = 1.0) -> list[dict]:
         out.append(dict(set=name, sensor_noise_scale=sensor_noise_scale, trials=len(mine), **counts,
                         success_rate=len(held) / len(mine), success_low=low, success_high=high,
                         infeasible=sum(not row["feasible"] for row in mine),
+                        beyond_actuator=sum(float(row["required_force"]) > grip_limit for row in mine),
                         no_slip_seen=sum(row["slips_detected"] == 0 for row in mine),
                         grip_over_limit_mean=float(grip.mean()) if grip.size else float("nan"),
                         grip_over_limit_max=float(grip.max()) if grip.size else float("nan"),

@@ -224,3 +224,19 @@ def test_tuning_runs_a_chosen_set_resumes_and_refuses_unknown_ones(tmp_path, mon
     monkeypatch.setattr(_batch, "_call", lambda *args: ran.append(args) or (_ for _ in ()).throw(AssertionError))
     again = tuning.run(tmp_path, sets=["box_0.15kg_0mm"], trials=1, processes=1)    # the trial is in the CSV
     assert not ran and again["held"] == summary["held"]
+
+
+def test_tuning_summary_counts_what_no_grip_holds_and_the_friction_error():
+    """Per set: trials whose slip limit lies past the finger drive's largest grip (1500 N mm / 50 mm = 30 N) are
+    counted apart, and the friction error is taken over the trials that measured it (a slip seen) only."""
+    from studies import tuning
+
+    def row(required, outcome, error, slips):
+        return dict(set="s", outcome=outcome, force_ratio=1.2, max_rotation_mrad=10.0, feasible=True,
+                    required_force=required, friction_estimate_error=error, slips_detected=slips)
+
+    summary = tuning.summarise([row(31.0, "dropped", -0.5, 1), row(29.0, "held", 0.1, 1), row(5.0, "held", 9.0, 0)],
+                               sensor_noise_scale=0.1)
+    entry = summary[0]
+    assert entry["beyond_actuator"] == 1 and entry["held"] == 2 and entry["sensor_noise_scale"] == 0.1
+    assert entry["friction_error_median"] == pytest.approx(-0.2) and entry["friction_error_min"] == -0.5
