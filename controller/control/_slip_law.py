@@ -123,7 +123,8 @@ def _load_follows_grip(parameters, now_use, now_grip, then_use, then_grip):
 
 
 @njit_cached
-def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noise, use_spread, full, frames):
+def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noise, use_spread, full, frames,
+               stall_judges):
     """The lift's test of a load that does not come on (once per lift): the grip's utilisation nu has sat below the
     lift's level for a window, neither rising nor falling (a load that eases after the lift's acceleration lowers
     nu while the grip lags: that is not it) - the grip is above what the load asks, which a held load
@@ -141,10 +142,14 @@ def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noi
         below = max(use_now[0], use_then[0]) + use_noise < level
         creeping = (use_now[0] >= level - use_noise and use_spread <= use_noise
                     and use_now[1] >= (1.0 + LIFT_GROWTH) * use_then[1])
-        # only where the lift's own stall test is blind: its noise margin more than twice the rise it allows
+        # only where the lift's own stall test cannot see: its noise margin more than twice the rise it allows, or
+        # it does not judge at all - the grip at the contact minimum (a quiet array's margin is small there, and an
+        # object sliding at that grip was seen by neither test). Not at the actuator's limit (no step to take)
+        blind = use_noise > 2.0 * parameters[P_STALL_RISE] * use_now[0] or (
+            not stall_judges and scalars[X_COMMAND] < SATURATED * parameters[P_MAXIMUM_FORCE])
         if (scalars[X_PHASE] == LIFT and scalars[X_PROBING] == 0.0 and use_now[1] > 0.0
                 and full and MINIMUM_FRICTION < use_then[0] and MINIMUM_FRICTION < use_now[0]
-                and use_noise > 2.0 * parameters[P_STALL_RISE] * use_now[0] and still and (below or creeping)):
+                and blind and still and (below or creeping)):
             scalars[X_LIFT_TEST], scalars[X_LIFT_FRAMES], scalars[X_LIFT_HELD] = LIFT_STEPPED, 0.0, 0.0
             # the step's reference grip: the command in the sensed scale, which the slowly filtered grip lags when
             # the grip was growing (the lag would pass for part of the step's rise)
@@ -287,7 +292,7 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
                 value = history_use[(written - back) % frames, 0]
                 low, high = _first_min(low, value), _first_max(high, value)
         _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noise, high - low,
-                   written >= frames, frames)
+                   written >= frames, frames, use_mode == 2)
     history_force[oldest] = signals[SLOW]
     history_ratios[oldest] = magnitudes
     history_use[oldest, :2] = use_now

@@ -46,26 +46,27 @@ grasp slid as a whole. The grip then stays where the lift left it, at mu_hat = `
 margin: more grip, the friction not measured (docs/design.md, sec. 12). Without rotational detection the bump test is
 not used; that probe starts as before and watches the total alone.
 
-Lift test (once per lift, before any slip was seen). Below the lift's level (mu_hat x ``lift_safety_fraction``)
-sliding bumps carry only mu of the grip, so the demand never asks for more and the grip stays where it is - at the
-contact minimum, where the utilisation's noise is several times the lift's stall threshold and its stall test cannot
-see. Where that test is blind (its noise margin more than twice ``STALL_RISE``), a utilisation that has sat below the
-level for a window, neither rising nor falling, is tested: the grip steps up by half (``_slip_law.LIFT_STEP``) and is
-held there for a window. Held, the load stays and nu falls like 1 / P; sliding, the load follows the grip and nu
-stays: halfway between is the verdict (no margin towards 'held', docs/design.md sec. 12). Sliding marks the array's
-slip (mu_hat = nu, the grip steps up as after any slip); held lets the grip back to its demand. The step is the safe
-direction. Just above the level the same blindness hides a slide the other way: bumps that slide at a friction a
-little above the level keep nu at mu, so the demand asks only mu / level more than the grip and the grip creeps up
-while the object slides (a bottle at mu 0.32 slid 35 mm in the lift). A grip that grew by ``_slip_law.LIFT_GROWTH``
-over the window while nu sat still at the level or above is tested the same way (its reference grip is the command in
-the sensed scale: the slowly filtered grip lags a growing one, and the lag would pass for a rise). After a slip seen
-in the lift, while the array still slides, the demand grows from the command at nu = mu_hat rather than from the
-slowly filtered grip at the nu it reads: that filter keeps the object's swing out of the demand, but it lags a grip
-that must grow several-fold, and an array that slides is at its limit whatever it reads (an estimator whose scale
-error changes with the force reads it below the mu_hat its slip set). It still slides while its nu does not fall with
-the growing grip - halfway between held and sliding, as the lift's test - over the last ``SLIDE_WINDOW`` of the fast
-signals, or, where the grip grew too little there for a verdict, over the window of the slow ones once that lies
-after the fast test's last 'held'; with no verdict, while nu reads at least mu_hat.
+Lift test (once per lift, before any slip was seen). Below the lift's level (mu_hat x ``lift_safety_fraction``) sliding
+bumps carry only mu of the grip, so the demand never asks for more and the grip stays where it is - at the contact
+minimum, where the utilisation's noise is several times the lift's stall threshold and its stall test cannot see. Where
+that test is blind (its noise margin more than twice ``STALL_RISE``) or does not judge at all (a grip at the contact
+minimum: on a quiet array the margin is narrow there, and an object sliding at that grip was watched by neither test), a
+utilisation that has sat below the level for a window, neither rising nor falling, is tested: the grip steps up by half
+(``_slip_law.LIFT_STEP``) and is held there for a window. Held, the load stays and nu falls like 1 / P; sliding, the
+load follows the grip and nu stays: halfway between is the verdict (no margin towards 'held', docs/design.md sec. 12).
+Sliding marks the array's slip (mu_hat = nu, the grip steps up as after any slip); held lets the grip back to its
+demand. The step is the safe direction. Just above the level the same blindness hides a slide the other way: bumps that
+slide at a friction a little above the level keep nu at mu, so the demand asks only mu / level more than the grip and
+the grip creeps up while the object slides (a bottle at mu 0.32 slid 35 mm in the lift). A grip that grew by
+``_slip_law.LIFT_GROWTH`` over the window while nu sat still at the level or above is tested the same way (its reference
+grip is the command in the sensed scale: the slowly filtered grip lags a growing one, and the lag would pass for a
+rise). After a slip seen in the lift, while the array still slides, the demand grows from the command at nu = mu_hat
+rather than from the slowly filtered grip at the nu it reads: that filter keeps the object's swing out of the demand,
+but it lags a grip that must grow several-fold, and an array that slides is at its limit whatever it reads (an estimator
+whose scale error changes with the force reads it below the mu_hat its slip set). It still slides while its nu does not
+fall with the growing grip - halfway between held and sliding, as the lift's test - over the last ``SLIDE_WINDOW`` of
+the fast signals, or, where the grip grew too little there for a verdict, over the window of the slow ones once that
+lies after the fast test's last 'held'; with no verdict, while nu reads at least mu_hat.
 
 A lift's grip pinned at the actuator's limit (``maximum_force``) is not judged by the lift's stall test: a load still
 coming on keeps nu where it is at a grip that cannot follow, held or sliding alike. The probe, later, finds the
