@@ -222,6 +222,7 @@ def outcome_columns(result, required: float, crush_force: float) -> dict:
                    hold_slip_mm=result.hold_slip_mm, hold_rotation_mrad=result.hold_rotation_mrad,
                    max_rotation_mrad=result.max_rotation_mrad,
                    creep_after_friction_um_per_s=result.creep_after_friction_um_per_s,
+                   creep_window_s=result.creep_window_s, creep_measurable=result.creep_measurable,
                    friction_estimate=result.friction_estimate,
                    friction_estimate_error=result.friction_estimate / settings.friction_coefficient - 1.0
                    if math.isfinite(result.friction_estimate) else math.nan,

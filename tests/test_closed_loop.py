@@ -66,6 +66,14 @@ def test_light_object_is_lifted_and_held_without_creep():
     # mu_hat is the load ratio of a grasp sliding as a whole, read through the sensor, whose per-bump CoP the reduced
     # model gives within 3.8-8.8 % of the FEM (reduced-calibration): 10 % (measured 0.799, -0.1 %)
     assert probed.friction_estimate == pytest.approx(0.8, rel=0.1)
+    # its creep after the friction is found is fitted from 0.2 s after the last slip (and 0.5 s into the hold) to the
+    # hold's end, on the 10 ms trace rows; measurable where that window is CREEP_WINDOW long or more
+    from controller.closed_loop import CREEP_WINDOW
+
+    hold_times = [time for time, phase in zip(probed.trace["time"], probed.trace["phase"]) if phase == "hold"]
+    start = max(probed.slip_events[-1][0] + 0.2, hold_times[0] + 0.5)
+    assert probed.creep_window_s == pytest.approx(hold_times[-1] - start, abs=0.011)
+    assert probed.creep_measurable == (probed.creep_window_s >= CREEP_WINDOW)
 
 
 def test_moment_turns_the_object_out_of_the_grasp_without_rotational_detection():

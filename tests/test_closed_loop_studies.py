@@ -57,6 +57,12 @@ def test_table1_quick_counts_outcomes_resumes_and_reports_intervals(tmp_path, mo
         assert (row["feasible"] == "True") == (float(row["required_force"]) < float(row["crush_force"]))
     for outcome in ("dropped", "crushed", "turned_out"):
         assert summary[outcome] == sum(row["outcome"] == outcome for row in rows)
+    for row in rows:                     # the creep counted where its window was long enough to fit it on
+        assert (row["creep_measurable"] == "True") == (float(row["creep_window_s"]) >= 1.0)
+        entry = summary["objects"][row["object"]]
+        measured = row["outcome"] == "held" and row["creep_measurable"] == "True"
+        assert entry["creep_measured"] == int(measured)
+        assert entry["creep_within_target"] == int(measured and float(row["creep_after_friction_um_per_s"]) <= 10.0)
     ran = []
     monkeypatch.setattr(_batch, "_call", lambda *args: ran.append(args) or (_ for _ in ()).throw(AssertionError))
     again = table1.run(tmp_path, quick=True, trials=1, processes=1)            # every trial is in the CSV

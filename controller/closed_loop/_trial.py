@@ -32,6 +32,11 @@ TABLE_CLEARANCE_M = 0.001           # object lower than this above the table dur
 # moment-loaded objects turn 30-105 mrad while the weight comes off the table in the lift (the grip builds from
 # F_min at the loop's rate) and then hold still; the eclair without it turns 180-190 mrad (fig10).
 ROTATION_LIMIT = 0.15
+# s: the shortest window a creep rate is fitted on. After a slip the grip steps up and comes back to its demand at
+# the release loop's 10 rad/s (0.5 s to settle within 1 %) and the object swings in the compliant fingers at 2.5-8 Hz
+# by up to 0.2 mm peak to peak: a line through less than a second of that is the settling and the swing (a friction
+# found 0.3 s before the hold's end: 530 um/s fitted over its last 0.1 s), not a creep
+CREEP_WINDOW = 1.0
 # Grasp-force loop rate [rad/s]. The FEM-calibrated fingertip's sensor reads the load ratio (CoP shift = moment arm
 # x Q_i / P_i, contact.reduced calibration), not the slip-amplified shear displacement the default 30 rad/s was
 # designed on: at 30 rad/s the bottle's grip oscillated between 7 and 29 N at ~2.5 Hz and it turned 115 mrad;
@@ -200,10 +205,11 @@ class TrialResult:
     grasp over the hold (``hold_slip_mm``, ``hold_rotation_mrad``) and its largest rotation in the grasp during lift
     and hold [mrad]; creep [um/s] and rotation creep [mrad/s] of the grasp point relative to the gripper after the
     first 0.5 s of the hold, and creep after the controller found the friction (from its last slip event, or that
-    0.5 s, to the end of the hold: ``creep_after_friction_um_per_s``). ``hold_force_settled`` [N] is the mean grip
-    over the last second of the hold (the force the controller settled at: Fig. 11's tau); ``friction_estimate``
-    and ``slip_events`` ((time [s], estimate, kind) per detection) are the incipient-slip controller's own (NaN and
-    empty for the displacement-target law)."""
+    0.5 s, to the end of the hold: ``creep_after_friction_um_per_s``, fitted over ``creep_window_s`` [s]; shorter than
+    CREEP_WINDOW, it is the grip step's settling and the object's swing, not a creep: ``creep_measurable``).
+    ``hold_force_settled`` [N] is the mean grip over the last second of the hold (the force the controller settled
+    at: Fig. 11's tau); ``friction_estimate`` and ``slip_events`` ((time [s], estimate, kind) per detection) are the
+    incipient-slip controller's own (NaN and empty for the displacement-target law)."""
 
     object_name: str
     settings: TrialSettings
@@ -224,8 +230,14 @@ class TrialResult:
     hold_rotation_mrad: float = math.nan
     max_rotation_mrad: float = math.nan
     creep_after_friction_um_per_s: float = math.nan
+    creep_window_s: float = math.nan
     wall_time: float = math.nan
     simulated_time: float = math.nan
+
+    @property
+    def creep_measurable(self) -> bool:
+        """The creep after the friction was found had a window of at least CREEP_WINDOW to be fitted on."""
+        return bool(self.creep_window_s >= CREEP_WINDOW)
 
     @property
     def rotated(self) -> bool:

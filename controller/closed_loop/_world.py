@@ -307,6 +307,7 @@ class GraspWorld:
             if len(after) > 2:
                 rates = np.polyfit(after[:, 0] - after[0, 0], after[:, 2:5], 1)[0]
                 result.creep_after_friction_um_per_s = float(1e3 * np.linalg.norm(rates))
+                result.creep_window_s = float(after[-1, 0] - after[0, 0])
         result.success = result.outcome == "held" and bool(holding.any())
         return result
 
