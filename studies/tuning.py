@@ -144,13 +144,20 @@ def run(out_dir, quick: bool = False, sets: list[str] | None = None, trials: int
               f"{entry['beyond_actuator']} past the actuator's grip); "
               f"{entry['no_slip_seen']} with no slip seen; settled grip {entry['grip_over_limit_mean']:.2f} x the slip "
               f"limit (max {entry['grip_over_limit_max']:.2f}); largest turn of a held object "
-              f"{entry['rotation_max_mrad']:.0f} mrad; friction read {100 * entry['friction_error_median']:+.0f} % "
-              f"at the median (lowest {100 * entry['friction_error_min']:+.0f} %)")
+              f"{entry['rotation_max_mrad']:.0f} mrad; {_friction_error(entry)}")
     held = sum(entry["held"] for entry in summary)
     print(f"{NAME}: held {held} of {len(rows)} in all")
     save_figure(_plot(summary, sensor_noise_scale), out_dir, NAME)
     return {"max_error": 1.0 - held / len(rows), "error_meaning": "share of the tuning trials not held",
             "held": held, "trials": len(rows), "sets": summary}
+
+
+def _friction_error(entry: dict) -> str:
+    """The summary's friction error in words (none where no trial of the set measured it)."""
+    if not np.isfinite(entry["friction_error_median"]):
+        return "friction measured in no trial"
+    return (f"friction read {100 * entry['friction_error_median']:+.0f} % at the median (lowest "
+            f"{100 * entry['friction_error_min']:+.0f} %)")
 
 
 def summarise(rows, sensor_noise_scale: float = 1.0) -> list[dict]:

@@ -135,7 +135,9 @@ def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noi
     (signature[1, count]: mu_hat becomes nu), held lets the grip go back to its demand. Not while the probe runs (it
     lowers the grip on purpose); a test still running when the lift ends is judged on into the hold. The same test
     runs when nu has sat still at the level or above while the grip grew by LIFT_GROWTH over the window: bumps that
-    slide at a friction just above the level keep nu = mu and the demand creeps up with the grip."""
+    slide at a friction just above the level keep nu = mu and the demand creeps up with the grip. It starts only
+    where the lift's stall test cannot see: blind in its noise, or not judging this frame (``stall_judges`` false:
+    the grip at the contact minimum)."""
     level = parameters[P_LIFT_SAFETY] * scalars[X_FRICTION]
     if scalars[X_LIFT_TEST] == LIFT_UNTRIED:
         still = abs(use_now[0] - use_then[0]) <= use_noise
@@ -145,11 +147,11 @@ def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noi
         # only where the lift's own stall test cannot see: its noise margin more than twice the rise it allows, or
         # it does not judge at all - the grip at the contact minimum (a quiet array's margin is small there, and an
         # object sliding at that grip was seen by neither test). Not at the actuator's limit (no step to take)
-        blind = use_noise > 2.0 * parameters[P_STALL_RISE] * use_now[0] or (
+        stall_cannot_see = use_noise > 2.0 * parameters[P_STALL_RISE] * use_now[0] or (
             not stall_judges and scalars[X_COMMAND] < SATURATED * parameters[P_MAXIMUM_FORCE])
         if (scalars[X_PHASE] == LIFT and scalars[X_PROBING] == 0.0 and use_now[1] > 0.0
                 and full and MINIMUM_FRICTION < use_then[0] and MINIMUM_FRICTION < use_now[0]
-                and blind and still and (below or creeping)):
+                and stall_cannot_see and still and (below or creeping)):
             scalars[X_LIFT_TEST], scalars[X_LIFT_FRAMES], scalars[X_LIFT_HELD] = LIFT_STEPPED, 0.0, 0.0
             # the step's reference grip: the command in the sensed scale, which the slowly filtered grip lags when
             # the grip was growing (the lag would pass for part of the step's rise)
