@@ -61,16 +61,17 @@ SETS = (TuningSet("eclair_mu_above_0.45", 150, (0.45, 1.2), 0, "eclair"),
           for index, (mass, lever) in enumerate(((0.3, 0.025), (0.45, 0.05), (0.45, 0.025), (0.3, 0.05)))))
 
 
-# the node noise times this at most: 200 mN per node, far past any array the closed loop was built for
-NOISE_SCALE_LIMIT = 100.0
+# the node noise times this at least (5 uN per node: the law sets its gates from the noise it reads at rest, and an
+# array with next to none leaves them at next to nothing) and at most (200 mN, past any array the loop was built for)
+NOISE_SCALE_RANGE = (0.01, 100.0)
 
 
-def check_noise_scale(scale) -> float:
-    """``--sensor-noise-scale`` must be a number in (0, NOISE_SCALE_LIMIT] (not 0: the law sets its gates from the
-    noise it reads at rest, and the protocol's arrays all have some)."""
+def check_noise_scale(scale: object) -> float:
+    """``--sensor-noise-scale`` must be a number in NOISE_SCALE_RANGE [-]."""
+    low, high = NOISE_SCALE_RANGE
     if (isinstance(scale, bool) or not isinstance(scale, (int, float)) or not math.isfinite(scale)
-            or not 0.0 < scale <= NOISE_SCALE_LIMIT):
-        raise ValueError(f"--sensor-noise-scale={scale!r} must be a number in (0, {NOISE_SCALE_LIMIT:g}]")
+            or not low <= scale <= high):
+        raise ValueError(f"--sensor-noise-scale={scale!r} must be a number in [{low:g}, {high:g}]")
     return float(scale)
 
 
@@ -82,7 +83,8 @@ def add_arguments(parser) -> None:
     parser.add_argument("--processes", type=int, default=None, help="worker processes (default: every CPU)")
     parser.add_argument("--sensor-noise-scale", type=float, default=1.0, metavar="S",
                         help=f"every trial's node noise times S, the draws unchanged (default 1: the protocol's "
-                             f"0.5-2 mN; allowed (0, {NOISE_SCALE_LIMIT:g}])")
+                             f"0.5-2 mN; allowed {NOISE_SCALE_RANGE[0]:g}-{NOISE_SCALE_RANGE[1]:g}); give it an --out "
+                             f"of its own: the table keeps only the trials of its last run")
 
 
 def grasp_object(entry: TuningSet):
@@ -162,10 +164,10 @@ def _friction_error(entry: dict) -> str:
 
 def summarise(rows, sensor_noise_scale: float = 1.0) -> list[dict]:
     """One row per set: the node noise's scale, outcomes, the held rate and its Wilson interval, trials past the
-    crush force (infeasible) and past the finger drive's largest grip (TORQUE_LIMIT / ARM_RADIUS: no grip the gripper
-    gives holds them), trials with no slip seen, grip over the slip limit [-], the largest turn of a held object
-    [mrad], the friction estimate's relative error [-] over the trials that measured it (a slip seen): median and most
-    negative."""
+    crush force (infeasible) and past the finger drive's largest grip (TORQUE_LIMIT / ARM_RADIUS: the reduced model's
+    slip limit asks more than the gripper gives), trials with no slip seen, grip over the slip limit [-], the largest
+    turn of a held object [mrad], the friction estimate's relative error [-] over the trials that measured it (a slip
+    seen): median and most negative."""
     from controller.closed_loop import ARM_RADIUS, OUTCOMES, TORQUE_LIMIT
     from controller.design import wilson_interval
 

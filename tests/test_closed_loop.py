@@ -73,7 +73,9 @@ def test_light_object_is_lifted_and_held_without_creep():
     hold_times = [time for time, phase in zip(probed.trace["time"], probed.trace["phase"]) if phase == "hold"]
     start = max(probed.slip_events[-1][0] + 0.2, hold_times[0] + 0.5)
     assert probed.creep_window_s == pytest.approx(hold_times[-1] - start, abs=0.011)
-    assert probed.creep_measurable == (probed.creep_window_s >= CREEP_WINDOW)
+    # found 2.5 s into the 4 s hold (measured 1.32 s left): long enough to fit, and it creeps below 10 um/s
+    assert probed.creep_window_s > CREEP_WINDOW and probed.creep_measurable
+    assert probed.creep_after_friction_um_per_s < 10.0
 
 
 def test_moment_turns_the_object_out_of_the_grasp_without_rotational_detection():

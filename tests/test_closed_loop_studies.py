@@ -58,6 +58,7 @@ def test_table1_quick_counts_outcomes_resumes_and_reports_intervals(tmp_path, mo
     for outcome in ("dropped", "crushed", "turned_out"):
         assert summary[outcome] == sum(row["outcome"] == outcome for row in rows)
     for row in rows:                     # the creep counted where its window was long enough to fit it on
+        assert 0.0 < float(row["creep_window_s"]) <= 4.0 - 0.5                    # within the hold, after its 0.5 s
         assert (row["creep_measurable"] == "True") == (float(row["creep_window_s"]) >= 1.0)
         entry = summary["objects"][row["object"]]
         measured = row["outcome"] == "held" and row["creep_measurable"] == "True"
@@ -197,15 +198,16 @@ def test_tuning_sets_draw_as_declared():
         assert obj.name == (entry.table_object or f"box_{entry.box[0]:g}kg_{1e3 * entry.box[1]:g}mm")
     # a quieter array: the same draws with the node noise scaled, under keys of their own
     quiet = tuning.jobs(chosen, trials=2, sensor_noise_scale=0.1)
+    assert len(quiet) == len(built)
     for (key, _, settings, _), (quiet_key, _, quiet_settings, _) in zip(built, quiet):
         assert quiet_settings == replace(settings, sensor_noise=0.1 * settings.sensor_noise) and quiet_key != key
 
 
-@pytest.mark.parametrize("scale", [0.0, -1.0, math.nan, 101.0, True, "0.1"])
+@pytest.mark.parametrize("scale", [0.0, 0.001, -1.0, math.nan, math.inf, 101.0, True, "0.1"])
 def test_tuning_refuses_a_bad_noise_scale(scale):
     from studies import tuning
 
-    with pytest.raises(ValueError, match=r"--sensor-noise-scale=.* must be a number in \(0, 100\]"):
+    with pytest.raises(ValueError, match=r"--sensor-noise-scale=.* must be a number in \[0.01, 100\]"):
         tuning.jobs(["eclair"], trials=1, sensor_noise_scale=scale)
 
 
@@ -246,3 +248,7 @@ def test_tuning_summary_counts_what_no_grip_holds_and_the_friction_error():
     entry = summary[0]
     assert entry["beyond_actuator"] == 1 and entry["held"] == 2 and entry["sensor_noise_scale"] == 0.1
     assert entry["friction_error_median"] == pytest.approx(-0.2) and entry["friction_error_min"] == -0.5
+    assert tuning._friction_error(entry) == "friction read -20 % at the median (lowest -50 %)"
+    unmeasured = tuning.summarise([row(5.0, "held", 9.0, 0)])[0]
+    assert math.isnan(unmeasured["friction_error_median"])
+    assert tuning._friction_error(unmeasured) == "friction measured in no trial"

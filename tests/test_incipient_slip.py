@@ -225,10 +225,11 @@ def _steps(grips):
 @pytest.mark.parametrize("noise", [0.03, 0.001])
 def test_a_lift_that_slides_below_the_prior_is_stepped_up_and_seen(noise):
     """mu = 0.2, below the lift's level 0.7 x 0.4: from the contact minimum every bump slides and carries mu of the
-    grip, so the demand never asks for more, and the lift's stall test cannot see it - with the sensor's noise it is
-    blind, and on a quiet array (0.001) it does not judge a grip at the contact minimum. The lift test steps the grip
-    up by half: the load follows (nu stays at mu), so the slip is seen, mu_hat is read within the grid's steps of 1 %
-    and the filters of the sliding bumps' ratio (2 %), and the grip ratchets up until the load is held."""
+    grip, so the demand never asks for more, and the lift's stall test cannot see it: it never judges a grip at the
+    contact minimum, and with the sensor's noise it would be blind anyway - on a quiet array (0.001) it is not, and
+    the lift test starts because the grip sits at the minimum. The lift test steps the grip up by half: the load
+    follows (nu stays at mu), so the slip is seen, mu_hat is read within the grid's steps of 1 % and the filters of
+    the sliding bumps' ratio (2 %), and the grip ratchets up until the load is held."""
     plant = QuasiStaticPlant((0.0, 2.0), 0.0, 0.2)
     controller, log = _lift(plant, 0.5, 400, noise)
     assert controller.slip_seen and controller.slip_events[0][2] == "array"

@@ -204,9 +204,10 @@ class TrialResult:
     ``success`` (held). Statistics: forces [N] per finger; the object's slide [mm] and rotation [mrad] in the
     grasp over the hold (``hold_slip_mm``, ``hold_rotation_mrad``) and its largest rotation in the grasp during lift
     and hold [mrad]; creep [um/s] and rotation creep [mrad/s] of the grasp point relative to the gripper after the
-    first 0.5 s of the hold, and creep after the controller found the friction (from its last slip event, or that
-    0.5 s, to the end of the hold: ``creep_after_friction_um_per_s``, fitted over ``creep_window_s`` [s]; shorter than
-    CREEP_WINDOW, it is the grip step's settling and the object's swing, not a creep: ``creep_measurable``).
+    first 0.5 s of the hold, and creep after the controller found the friction (from 0.2 s after its last slip
+    event, or that 0.5 s, to the end of the hold: ``creep_after_friction_um_per_s``, fitted over ``creep_window_s``
+    [s]; shorter than CREEP_WINDOW, it is the grip step's settling and the object's swing, not a creep:
+    ``creep_measurable``).
     ``hold_force_settled`` [N] is the mean grip over the last second of the hold (the force the controller settled
     at: Fig. 11's tau); ``friction_estimate`` and ``slip_events`` ((time [s], estimate, kind) per detection) are the
     incipient-slip controller's own (NaN and empty for the displacement-target law)."""

@@ -37,6 +37,7 @@ APPROACH, GRASP, LIFT, HOLD, PLACE, RELEASE = (PHASE_CODES[phase] for phase in G
 # --- rows of the per-bump signals (5, 2, k) and of the ratio signals (4, 2, k, 2) -------------------------------
 FAST, FAST_PREVIOUS, SLOW, SLOW_PREVIOUS, RATIO_NOISE = range(5)
 SATURATED = 0.98                 # a command this close to the actuator's limit is pinned there, not regulated
+AT_MINIMUM = 1.05                # a command within this factor of the contact minimum sits there (not load-driven)
 MINIMUM_FRICTION = 0.05          # a slip measured at a lower ratio carried no load: it is not counted
 # the lift's test (``_lift_test``): a step up of the grip by this fraction, held for a watch window. Half: a held
 # load's nu then falls by log(1.5) = 0.41, and the verdict halfway (0.2) clears the noise margin at the contact
@@ -124,7 +125,7 @@ def _load_follows_grip(parameters, now_use, now_grip, then_use, then_grip):
 
 @njit_cached
 def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noise, use_spread, full, frames,
-               stall_judges):
+               at_minimum):
     """The lift's test of a load that does not come on (once per lift): the grip's utilisation nu has sat below the
     lift's level for a window, neither rising nor falling (a load that eases after the lift's acceleration lowers
     nu while the grip lags: that is not it) - the grip is above what the load asks, which a held load
@@ -136,8 +137,8 @@ def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noi
     lowers the grip on purpose); a test still running when the lift ends is judged on into the hold. The same test
     runs when nu has sat still at the level or above while the grip grew by LIFT_GROWTH over the window: bumps that
     slide at a friction just above the level keep nu = mu and the demand creeps up with the grip. It starts only
-    where the lift's stall test cannot see: blind in its noise, or not judging this frame (``stall_judges`` false:
-    the grip at the contact minimum)."""
+    where the lift's stall test cannot see: blind in its noise, or not judging at all because the grip is at the
+    contact minimum (``at_minimum``: the stall test judges only a load-driven grip)."""
     level = parameters[P_LIFT_SAFETY] * scalars[X_FRICTION]
     if scalars[X_LIFT_TEST] == LIFT_UNTRIED:
         still = abs(use_now[0] - use_then[0]) <= use_noise
@@ -146,9 +147,8 @@ def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noi
                     and use_now[1] >= (1.0 + LIFT_GROWTH) * use_then[1])
         # only where the lift's own stall test cannot see: its noise margin more than twice the rise it allows, or
         # it does not judge at all - the grip at the contact minimum (a quiet array's margin is small there, and an
-        # object sliding at that grip was seen by neither test). Not at the actuator's limit (no step to take)
-        stall_cannot_see = use_noise > 2.0 * parameters[P_STALL_RISE] * use_now[0] or (
-            not stall_judges and scalars[X_COMMAND] < SATURATED * parameters[P_MAXIMUM_FORCE])
+        # object sliding at that grip was seen by neither test)
+        stall_cannot_see = use_noise > 2.0 * parameters[P_STALL_RISE] * use_now[0] or at_minimum
         if (scalars[X_PHASE] == LIFT and scalars[X_PROBING] == 0.0 and use_now[1] > 0.0
                 and full and MINIMUM_FRICTION < use_then[0] and MINIMUM_FRICTION < use_now[0]
                 and stall_cannot_see and still and (below or creeping)):
@@ -269,7 +269,8 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
     # the array as a whole: against the probe's falling grip, or, in the lift, a load-driven grip (above the
     # minimum force) whose load stopped growing below what it carries; not with the grip pinned at the actuator's
     # limit (a load still coming on then keeps nu where it is, held or not: the test cannot tell them apart)
-    lifting = (scalars[X_PHASE] == LIFT and scalars[X_COMMAND] > 1.05 * scalars[X_MINIMUM] and not seen
+    at_minimum = scalars[X_COMMAND] <= AT_MINIMUM * scalars[X_MINIMUM]        # False while no minimum is latched
+    lifting = (scalars[X_PHASE] == LIFT and scalars[X_COMMAND] > AT_MINIMUM * scalars[X_MINIMUM] and not seen
                and scalars[X_COMMAND] < SATURATED * parameters[P_MAXIMUM_FORCE])
     use_mode = 1 if probed else (2 if lifting and parameters[P_STALL_FRACTION] > 0.0 else 0)
     use_noise = math.sqrt(2.0 * parameters[P_SLOW_GAIN]) * wrench_noise / max(sensed, 1e-9)
@@ -294,7 +295,7 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
                 value = history_use[(written - back) % frames, 0]
                 low, high = _first_min(low, value), _first_max(high, value)
         _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noise, high - low,
-                   written >= frames, frames, use_mode == 2)
+                   written >= frames, frames, at_minimum)
     history_force[oldest] = signals[SLOW]
     history_ratios[oldest] = magnitudes
     history_use[oldest, :2] = use_now
