@@ -157,3 +157,25 @@ def test_plant_and_estimator_share_no_arrays():
     plant_arrays = [a for a in plant.compiled_inputs() if isinstance(a, np.ndarray)]
     for held in (a for a in estimator if isinstance(a, np.ndarray)):
         assert not any(np.shares_memory(held, table) for table in plant_arrays)
+
+
+def test_a_fitted_base_response_is_what_its_cache_gives_back(tmp_path):
+    # a design sweep uses a fit as computed on its first run and read back from the cache on the next: both must give
+    # the same numbers, so the fit returns its fields at the float32 precision ``save`` stores (exact equality)
+    from contact.reduced.base_response import BaseResponse, fit_base_response
+
+    packaged = BaseResponse.load()
+    count = len(packaged.centres)
+
+    def path(loads):                                       # bump states (t, k, 4) -> (states, fields) of a path
+        states = np.zeros((len(loads), count, 4))
+        states[:, :, :len(loads[0])] = np.asarray(loads)[:, None, :]
+        return states, packaged.bump_pressure(states)
+
+    press = path([(0.5,), (1.0,), (2.0,)])
+    shear = path([(1.0, 0.0), (1.0, 0.1), (1.0, 0.2)])
+    fitted = fit_base_response(packaged.design, press, [shear], [], packaged.positions, packaged.triangles,
+                               packaged.centres)
+    again = BaseResponse.load(fitted.save(tmp_path / "fit.npz"))
+    for name in ("normal_levels", "normal_fields", "shear_levels", "shear_fields", "spin_fields"):
+        assert np.array_equal(getattr(again, name), getattr(fitted, name)), name
