@@ -113,7 +113,7 @@ def _summary(rows) -> dict:
         feasible = [row for row in mine if row["feasible"]]
         held = [row for row in mine if row["outcome"] == "held"]
         ratio = np.array([row["force_ratio"] for row in held], dtype=float)
-        measured = [row for row in held if row["creep_measurable"] in (True, "True")]
+        measured = [row for row in held if row["creep_measurable"]]
         errors = np.array([row["friction_estimate_error"] for row in mine], dtype=float)
         successes = len(held)
         objects[name] = dict(success=f"{successes}/{len(mine)}", success_rate=successes / len(mine),

@@ -164,14 +164,12 @@ def _friction_error(entry: dict) -> str:
 
 def summarise(rows, sensor_noise_scale: float = 1.0) -> list[dict]:
     """One row per set: the node noise's scale, outcomes, the held rate and its Wilson interval, trials past the
-    crush force (infeasible) and past the finger drive's largest grip (TORQUE_LIMIT / ARM_RADIUS: the reduced model's
+    crush force (infeasible) and past the finger drive's largest grip (GRIP_LIMIT, 30 N: the reduced model's
     slip limit asks more than the gripper gives), trials with no slip seen, grip over the slip limit [-], the largest
     turn of a held object [mrad], the friction estimate's relative error [-] over the trials that measured it (a slip
     seen): median and most negative."""
-    from controller.closed_loop import ARM_RADIUS, OUTCOMES, TORQUE_LIMIT
+    from controller.closed_loop import GRIP_LIMIT, OUTCOMES
     from controller.design import wilson_interval
-
-    grip_limit = TORQUE_LIMIT / ARM_RADIUS              # N: the finger drive's largest grip
 
     out = []
     for name in dict.fromkeys(row["set"] for row in rows):
@@ -186,7 +184,7 @@ def summarise(rows, sensor_noise_scale: float = 1.0) -> list[dict]:
         out.append(dict(set=name, sensor_noise_scale=sensor_noise_scale, trials=len(mine), **counts,
                         success_rate=len(held) / len(mine), success_low=low, success_high=high,
                         infeasible=sum(not row["feasible"] for row in mine),
-                        beyond_actuator=sum(float(row["required_force"]) > grip_limit for row in mine),
+                        beyond_actuator=sum(float(row["required_force"]) > GRIP_LIMIT for row in mine),
                         no_slip_seen=sum(row["slips_detected"] == 0 for row in mine),
                         grip_over_limit_mean=float(grip.mean()) if grip.size else float("nan"),
                         grip_over_limit_max=float(grip.max()) if grip.size else float("nan"),

@@ -46,9 +46,9 @@ from ._minimum import MinimumForce, holds_at, minimum_grip_force
 from ._multirate import LoopSample, MultiRateRunner, rate_ratio
 from ._sensing import SensingChain, SensorFrame
 from ._trial import (ACTUATOR_RATE_HZ, ARM_RADIUS, CREEP_WINDOW, DESIGN_FRICTION, FRICTION_RANGE, GRAVITY,
-                     HELD_OUT_SEED, LOOP_RATE, MM_PER_M, OUTCOMES, PHYSICS_RATE_HZ, PLANT_SPREAD, ROTATION_LIMIT,
-                     TABLE_I_OBJECTS, TORQUE_LIMIT, TUNING_SEED, ControllerKind, GraspObject, TargetDesign, TrialResult,
-                     TrialSettings, default_tip, random_settings, required_grip_force)
+                     GRIP_LIMIT, HELD_OUT_SEED, LOOP_RATE, MM_PER_M, OUTCOMES, PHYSICS_RATE_HZ, PLANT_SPREAD,
+                     ROTATION_LIMIT, TABLE_I_OBJECTS, TORQUE_LIMIT, TUNING_SEED, ControllerKind, GraspObject,
+                     TargetDesign, TrialResult, TrialSettings, default_tip, random_settings, required_grip_force)
 from ._world import GraspWorld, run_trial
 
 __all__ = ["GraspObject", "TABLE_I_OBJECTS", "TargetDesign", "TrialSettings", "TrialResult", "ControllerKind",
@@ -56,5 +56,5 @@ __all__ = ["GraspObject", "TABLE_I_OBJECTS", "TargetDesign", "TrialSettings", "T
            "default_processes", "MinimumForce", "holds_at", "minimum_grip_force", "random_settings",
            "required_grip_force", "default_tip", "DESIGN_FRICTION", "GRAVITY", "MM_PER_M", "PHYSICS_RATE_HZ",
            "ACTUATOR_RATE_HZ", "LOOP_RATE", "ROTATION_LIMIT", "CREEP_WINDOW", "TORQUE_LIMIT", "ARM_RADIUS",
-           "LoopSample", "MultiRateRunner", "rate_ratio", "FRICTION_RANGE", "PLANT_SPREAD", "OUTCOMES", "TUNING_SEED",
-           "HELD_OUT_SEED", "estimator_bench", "EstimatorBench", "belief_errors"]
+           "GRIP_LIMIT", "LoopSample", "MultiRateRunner", "rate_ratio", "FRICTION_RANGE", "PLANT_SPREAD", "OUTCOMES",
+           "TUNING_SEED", "HELD_OUT_SEED", "estimator_bench", "EstimatorBench", "belief_errors"]

@@ -27,6 +27,7 @@ LIFT_HEIGHT_M = 0.05
 GRID_SPACING = 1.0                  # mm, base-pressure grid (kernel radius >= 4.7 mm; sensor cells 3 mm)
 TORQUE_LIMIT = 1500.0               # N mm, finger actuator (30 N per finger at the 50 mm arm radius)
 ARM_RADIUS = AccelerationControlParameters().arm_radius      # mm per rad of the finger drive
+GRIP_LIMIT = TORQUE_LIMIT / ARM_RADIUS                       # N: the largest grip a finger drive gives
 TABLE_CLEARANCE_M = 0.001           # object lower than this above the table during the hold = touches the ground
 # rad (8.6 deg): an object turned further in the grasp has rotated out of it. With rotational detection the
 # moment-loaded objects turn 30-105 mrad while the weight comes off the table in the lift (the grip builds from

@@ -27,7 +27,7 @@ from . import _kernel as K
 from ._bench import estimator_bench
 from ._bridge import ContactBridge, mujoco_step_function
 from ._sensing import SensingChain
-from ._trial import (APPROACH_GAP_M, ARM_RADIUS, GRAVITY, LIFT_HEIGHT_M, LOOP_RATE, MM_PER_M, TABLE_CLEARANCE_M,
+from ._trial import (APPROACH_GAP_M, GRAVITY, GRIP_LIMIT, LIFT_HEIGHT_M, LOOP_RATE, MM_PER_M, TABLE_CLEARANCE_M,
                      TORQUE_LIMIT, ControllerKind, GraspObject, TrialResult, TrialSettings)
 
 
@@ -340,7 +340,7 @@ class _DisplacementLaw:
 
 def _controller(settings: TrialSettings, parameters, sensing: SensingChain):
     """The trial's controller, fed only what the sensor reports (``observe``) and the phase (``step``)."""
-    limit = TORQUE_LIMIT / ARM_RADIUS
+    limit = GRIP_LIMIT
     if settings.controller is ControllerKind.DISPLACEMENT_TARGETS:
         base = GraspForceParameters(approach_force=0.5, maximum_force=limit, loop_rate=LOOP_RATE) \
             if parameters is None else parameters
