@@ -5,6 +5,7 @@ project's own coarse mesh against the project's FEM."""
 import dataclasses
 import warnings
 
+import numpy as np
 import pytest
 
 from contact.calculix import BumpSetup, bump_scene
@@ -70,6 +71,26 @@ def test_getfem_runs_only_a_held_bump_under_a_plate_and_says_how_to_install_it(m
     monkeypatch.setenv("FINGERTIP_CACHE", str(tmp_path))
     with pytest.raises(GetfemUnavailable, match="apt-get install python3-getfem"):
         bump_job(_scene("linear")).run()
+
+
+@pytest.mark.parametrize("ending, timeout", [("echo 'no convergence' >&2; exit 1", 60.0),
+                                             ("exec sleep 30", 1.0)])
+def test_a_getfem_run_that_fails_or_times_out_leaves_no_partial_output(monkeypatch, tmp_path, ending, timeout):
+    """A run that stops (its own error, a timeout) raises GetfemFailed by name and leaves no out.<pid>.partial.npz
+    behind in the cache: each run writes its own, and none is ever read again. A stand-in interpreter plays GetFEM:
+    it reports a release, writes half an output and stops."""
+    from contact.getfem import GetfemFailed
+    from contact.getfem._run import run_job
+
+    fake = tmp_path / "fake-python"
+    fake.write_text(f'#!/bin/sh\nif [ "$2" = "-c" ]; then echo 5.4-test; exit 0; fi\nprintf half > "$4"\n{ending}\n')
+    fake.chmod(0o755)
+    monkeypatch.setenv("FINGERTIP_GETFEM_PYTHON", str(fake))
+    monkeypatch.setenv("FINGERTIP_CACHE", str(tmp_path / "cache"))
+    with pytest.raises(GetfemFailed, match="GetFEM"):
+        run_job({"values": np.arange(3.0)}, timeout=timeout)
+    assert list((tmp_path / "cache").rglob("job.npz"))                       # the job was written and run
+    assert not list((tmp_path / "cache").rglob("*.partial.npz"))
 
 
 @pytest.fixture(scope="module")

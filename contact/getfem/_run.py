@@ -137,8 +137,10 @@ def run_job(job: dict, timeout: float = 7200.0) -> tuple[Path, float]:
                                    capture_output=True, text=True, timeout=timeout,
                                    env=dict(os.environ, OMP_NUM_THREADS="1"))
     except subprocess.TimeoutExpired:
+        target.unlink(missing_ok=True)          # what a stopped run wrote is never read: each run writes its own
         raise GetfemFailed(f"GetFEM did not finish {folder / 'job.npz'} within {timeout:.0f} s") from None
     if completed.returncode != 0 or not target.is_file():
+        target.unlink(missing_ok=True)
         tail = "\n".join((completed.stdout + completed.stderr).strip().splitlines()[-8:])
         message = f"GetFEM stopped on {folder / 'job.npz'} (exit code {completed.returncode}):\n{tail}"
         if completed.returncode > 0:            # the script's own error repeats; a signal (interrupt, OOM) may not
