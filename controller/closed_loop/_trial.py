@@ -21,7 +21,9 @@ MM_PER_M = 1000.0
 # fingertips; at 2 kHz it rattled between the fingers and turned out).
 PHYSICS_RATE_HZ = 500.0
 ACTUATOR_RATE_HZ = 8000.0           # Acceleration Control + DOB, sub-stepped in the contact kernel (paper: 8 kHz)
-DESIGN_FRICTION = 0.4               # the friction the displacement-target controller is designed for (the prior of the incipient-slip law); trials draw 0.2-1.2 (FRICTION_RANGE)
+# the friction the displacement-target controller is designed for (the prior of the incipient-slip law); trials draw
+# 0.2-1.2 (FRICTION_RANGE)
+DESIGN_FRICTION = 0.4
 APPROACH_GAP_M = 0.001              # initial gap between each bump tip and the object face
 LIFT_HEIGHT_M = 0.05
 GRID_SPACING = 1.0                  # mm, base-pressure grid (kernel radius >= 4.7 mm; sensor cells 3 mm)
