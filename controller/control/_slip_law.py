@@ -308,15 +308,23 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
         for i in range(count + 1):
             streak[f, i] = streak[f, i] + 1 if signature[f, i] else 0
     # a bump slip counts when two bumps of one fingertip show it: an array starts to slide at more than one bump
-    # (the outer ones in a pair under a moment, all under a force), while noise flags bumps one at a time
+    # (the outer ones in a pair under a moment, all under a force), while noise flags bumps one at a time. It reads
+    # the ratio two of them reach, the second largest: each sits at mu, each reading carries the estimator's error
+    # for its bump, and the largest over-reads mu (docs/design.md sec. 12). Bumps that carry no load to speak of
+    # measure nothing; the array's tests below still run. Where both fingertips show one (rare), the larger reading
+    # measures (the smaller changed no tuning outcome, tried with each fingertip's smallest reading)
     for f in range(2):
-        flagged, largest = 0, 0.0
+        flagged, first, second = 0, 0.0, 0.0
         for i in range(count):
             if streak[f, i] >= confirm:
                 flagged += 1
-                largest = _first_max(largest, magnitudes[f, i])
-        if flagged >= 2 and largest > measured:
-            finger, index, measured = f, 0, largest
+                value = magnitudes[f, i]
+                if value > first:
+                    first, second = value, first
+                elif value > second:
+                    second = value
+        if flagged >= 2 and second >= MINIMUM_FRICTION and second > measured:
+            finger, index, measured = f, 0, second
     if index < 0:
         # the array slides as a whole: at its limit, lambda*(mu) = 1, so its utilisation nu = 1 / lambda*(1) is mu
         # (any mode, translation or rotation: the bumps' largest ratio overshoots it under a moment)

@@ -28,23 +28,25 @@ the same way) while it watches how each loaded bump's load ratio answers its fal
 friction limit keeps |rho_i| = mu while P_i falls: when P_i has fallen by ``force_drop`` over the window and
 |rho_i| plus its noise margin rose less than P_i^-``stick_exponent`` (just under the stuck bound 2/3, so that
 the gap between the two, ~8 % of |rho_i| over a 25-frame window of the probe, clears the noise margin), for
-``confirm_frames`` frames, that bump slides. Its ratio |rho_i|
-is then the friction coefficient of this object measured in hand: mu_hat takes it, the probe ends and the grip
-steps up at once to the demand at s mu_hat. Under a moment the bumps far from the array's slip centre slide first
-while the others hold (incipient rotational slip). Under pure weight all slide together, which shows sooner in the
-total tangential load of both fingertips (in one frame): equilibrium keeps it constant while the object holds, and a
-fall by ``total_drop`` together with the normal force is the grasp sliding as a whole (its most loaded bumps are
-then on their limit: mu_hat is their ratio). After the probe the total load is still watched: a gross slip seen
-later (the load grew, or mu_hat was too high) lowers mu_hat and steps the grip up again. Single bumps are judged
-only while the grip is probed down: at a held grip a bump's force changes only as the normal forces redistribute,
-not as the controller asks. A probe whose bump test cannot be relied on to see a bump slide does not start: over a
-window the probe opens a gap of |rho_i| (exp(``stick_exponent`` ``probe_rate`` window) - 1) between a stuck bump's
-ratio and a sliding one's; where neither fingertip has two watched bumps whose noise margin lies below that gap (a
-light object: small tangential loads per bump against the sensor's noise), a sliding bump is flagged only if its read
-ratio happens to fall as the loads shift, and where it was not, the probe ran on through incipient slip until the
-grasp slid as a whole. The grip then stays where the lift left it, at mu_hat = ``prior_friction`` with the lift's
-margin: more grip, the friction not measured (docs/design.md, sec. 12). Without rotational detection the bump test is
-not used; that probe starts as before and watches the total alone.
+``confirm_frames`` frames, that bump slides. Once two bumps of one fingertip slide, the ratio |rho_i| that two of
+them reach (the second largest) is the friction coefficient of this object measured in hand: each sliding bump sits
+at mu, but each reading carries the estimator's own error for that bump (its model is not the plant's), and the
+largest of several readings over-reads mu - a hold whose margin that eats lets the object creep. mu_hat takes it, the
+probe ends and the grip steps up at once to the demand at s mu_hat. Under a moment the bumps far from the array's
+slip centre slide first while the others hold (incipient rotational slip). Under pure weight all slide together,
+which shows sooner in the total tangential load of both fingertips (in one frame): equilibrium keeps it constant
+while the object holds, and a fall by ``total_drop`` together with the normal force is the grasp sliding as a whole
+(at its limit the array's utilisation nu is mu: mu_hat takes it). After the probe the total load is still
+watched: a gross slip seen later (the load grew, or mu_hat was too high) lowers mu_hat and steps the grip up again.
+Single bumps are judged only while the grip is probed down: at a held grip a bump's force changes only as the normal
+forces redistribute, not as the controller asks. A probe whose bump test cannot be relied on to see a bump slide does
+not start: over a window the probe opens a gap of |rho_i| (exp(``stick_exponent`` ``probe_rate`` window) - 1) between
+a stuck bump's ratio and a sliding one's; where neither fingertip has two watched bumps whose noise margin lies below
+that gap (a light object: small tangential loads per bump against the sensor's noise), a sliding bump is flagged only
+if its read ratio happens to fall as the loads shift, and where it was not, the probe ran on through incipient slip
+until the grasp slid as a whole. The grip then stays where the lift left it, at mu_hat = ``prior_friction`` with the
+lift's margin: more grip, the friction not measured (docs/design.md, sec. 12). Without rotational detection the bump
+test is not used; that probe starts as before and watches the total alone.
 
 Lift test (once per lift, before any slip was seen). Below the lift's level (mu_hat x ``lift_safety_fraction``) sliding
 bumps carry only mu of the grip, so the demand never asks for more and the grip stays where it is - at the contact
