@@ -97,8 +97,8 @@ def test_a_slip_reads_the_friction_two_sliding_bumps_reach_not_one_over_read():
     tangential, torque, friction = (0.0, 1.0), 40.0, 0.5
     plain, _ = _run(QuasiStaticPlant(tangential, torque, friction))
     assert plain.slip_events[0][2] == "bump"
-    first = _first_sliding_bump(QuasiStaticPlant(tangential, torque, friction), plain.slip_events[0][0])
-    controller, _ = _run(OverReadPlant(tangential, torque, friction, first, 1.3))
+    over_read = _most_loaded_sliding_bump(QuasiStaticPlant(tangential, torque, friction), plain.slip_events[0][0])
+    controller, _ = _run(OverReadPlant(tangential, torque, friction, over_read, 1.3))
     assert controller.slip_events[0][2] == "bump"
     # as the probe reads the honest array: a bump on its limit reads mu at any grip, through the slow filter's lag
     # within 1 % (0.1 % here); the over-read bump alone would give 1.3 x that
@@ -106,7 +106,7 @@ def test_a_slip_reads_the_friction_two_sliding_bumps_reach_not_one_over_read():
     assert plain.friction_estimate == pytest.approx(friction, rel=0.01)
 
 
-def _first_sliding_bump(plant, until):
+def _most_loaded_sliding_bump(plant, until):
     """The bump the test over-reads: of those sliding at the grip the probe had reached when the honest array's slip
     was seen (``until`` [s]), the one carrying the largest tangential load (an outer bump under the moment)."""
     _, log = _run(plant, hold=until)
