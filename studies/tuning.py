@@ -17,7 +17,6 @@ tuning.png/pdf.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -68,11 +67,9 @@ NOISE_SCALE_RANGE = (0.01, 100.0)
 
 def check_noise_scale(scale: object) -> float:
     """``--sensor-noise-scale`` must be a number in NOISE_SCALE_RANGE [-]."""
-    low, high = NOISE_SCALE_RANGE
-    if (isinstance(scale, bool) or not isinstance(scale, (int, float)) or not math.isfinite(scale)
-            or not low <= scale <= high):
-        raise ValueError(f"--sensor-noise-scale={scale!r} must be a number in [{low:g}, {high:g}]")
-    return float(scale)
+    from fem.validation import check_range
+
+    return check_range("--sensor-noise-scale", scale, *NOISE_SCALE_RANGE)
 
 
 def add_arguments(parser) -> None:
@@ -178,13 +175,13 @@ def summarise(rows, sensor_noise_scale: float = 1.0) -> list[dict]:
         low, high = wilson_interval(len(held), len(mine))
         grip = np.array([row["force_ratio"] for row in held], dtype=float)
         turns = np.array([row["max_rotation_mrad"] for row in held], dtype=float)
-        errors = np.array([row["friction_estimate_error"] for row in mine if float(row["slips_detected"]) > 0],
+        errors = np.array([row["friction_estimate_error"] for row in mine if row["slips_detected"] > 0],
                           dtype=float)
         counts = {outcome: sum(row["outcome"] == outcome for row in mine) for outcome in OUTCOMES}
         out.append(dict(set=name, sensor_noise_scale=sensor_noise_scale, trials=len(mine), **counts,
                         success_rate=len(held) / len(mine), success_low=low, success_high=high,
                         infeasible=sum(not row["feasible"] for row in mine),
-                        beyond_actuator=sum(float(row["required_force"]) > GRIP_LIMIT for row in mine),
+                        beyond_actuator=sum(row["required_force"] > GRIP_LIMIT for row in mine),
                         no_slip_seen=sum(row["slips_detected"] == 0 for row in mine),
                         grip_over_limit_mean=float(grip.mean()) if grip.size else float("nan"),
                         grip_over_limit_max=float(grip.max()) if grip.size else float("nan"),

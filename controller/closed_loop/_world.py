@@ -340,9 +340,8 @@ class _DisplacementLaw:
 
 def _controller(settings: TrialSettings, parameters, sensing: SensingChain):
     """The trial's controller, fed only what the sensor reports (``observe``) and the phase (``step``)."""
-    limit = GRIP_LIMIT
     if settings.controller is ControllerKind.DISPLACEMENT_TARGETS:
-        base = GraspForceParameters(approach_force=0.5, maximum_force=limit, loop_rate=LOOP_RATE) \
+        base = GraspForceParameters(approach_force=0.5, maximum_force=GRIP_LIMIT, loop_rate=LOOP_RATE) \
             if parameters is None else parameters
         if not isinstance(base, GraspForceParameters):
             raise ValueError(f"controller_parameters must be GraspForceParameters for {settings.controller.value}, "
@@ -350,7 +349,7 @@ def _controller(settings: TrialSettings, parameters, sensing: SensingChain):
         law = GraspForceController(replace(base, rotational_slip_detection=settings.rotational_slip_detection),
                                    sensing.design_references())
         return _DisplacementLaw(law)
-    base = IncipientSlipParameters(maximum_force=limit) if parameters is None else parameters
+    base = IncipientSlipParameters(maximum_force=GRIP_LIMIT) if parameters is None else parameters
     if not isinstance(base, IncipientSlipParameters):
         raise ValueError(f"controller_parameters must be IncipientSlipParameters for {settings.controller.value}, "
                          f"got {type(base).__name__}")
