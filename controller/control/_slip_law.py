@@ -27,7 +27,7 @@ APPROACH, GRASP, LIFT, HOLD, PLACE, RELEASE = (PHASE_CODES[phase] for phase in G
  X_PROBE_BEGUN, X_CARRY_TIME, X_RELEASING, X_RELEASE_NEED, X_RELEASE_FORCE, X_FRAMES, X_HISTORY, X_PHASE, X_GRIP,
  X_CARRY_SLIP, X_SENSED, X_COMMAND_MEAN, X_SENSED_MEAN, X_USE_SLOW, X_SENSED_SLOW, X_PROBED, X_LIFT_TEST,
  X_LIFT_FRAMES, X_LIFT_USE, X_LIFT_GRIP, X_LIFT_HOLD, X_LIFT_HELD, X_SLID_USE, X_SLID_GRIP, X_SLIDING,
- X_SLID_HELD, X_PLACE_FORCE, X_VISIBLE, X_SIZE) = range(39)
+ X_SLID_HELD, X_PLACE_FORCE, X_VISIBLE, X_LIFT_STEP, X_LIFT_UNJUDGED, X_SIZE) = range(41)
 # --- parameter slots --------------------------------------------------------------------------------------------
 (P_PERIOD, P_FAST_GAIN, P_SLOW_GAIN, P_APPROACH_FORCE, P_RAMP_RATE, P_MAXIMUM_FORCE, P_LOOP_RATE,
  P_RELEASE_LOOP_RATE, P_SAFETY, P_LIFT_SAFETY, P_PRIOR_FRICTION, P_MAXIMUM_FRICTION, P_PROBE_RATE, P_PROBE_DELAY,
@@ -43,11 +43,16 @@ MINIMUM_FRICTION = 0.05          # a slip measured at a lower ratio carried no l
 # load's nu then falls by log(1.5) = 0.41, and the verdict halfway (0.2) clears the noise margin at the contact
 # minimum (0.09-0.12 of nu for the traced bottle at 0.5-0.9 N, docs/design.md sec. 12)
 LIFT_STEP = 0.5
+# the step where a blind probe asks for the test (``_lift_step``): as large as its verdict needs over nu's noise, at
+# least this (a rise the verdict can see: twice force_drop, with room), at most LIFT_STEP - the grip there can be far
+# above the contact minimum (blind eclairs at 7 N: a step of half took 3 tuning eclairs past their crush force)
+LIFT_STEP_LEAST = 0.15
 # ... and a grip that grew by this fraction over the window while nu sat at the lift's level or above: sliding just
 # above the level, the load follows the grip and the demand asks only mu / level more (tuning draws: 0.2 and 0.3
 # alike, 0.5 one drop more)
 LIFT_GROWTH = 0.3
-LIFT_UNTRIED, LIFT_STEPPED, LIFT_DONE = 0.0, 1.0, 2.0
+# the lift test's states; ASKED: a probe that could not rely on its bump test did not start, and asked for the test
+LIFT_UNTRIED, LIFT_STEPPED, LIFT_DONE, LIFT_ASKED = 0.0, 1.0, 2.0, 3.0
 # the probe starts only where some fingertip has this many bumps its test can see slide (``_visible_bumps``): the bump
 # test confirms a slip at two bumps of one fingertip
 BLIND_BELOW = 2
@@ -123,6 +128,13 @@ def _load_follows_grip(parameters, now_use, now_grip, then_use, then_grip):
     return 1 if math.log(now_use / then_use) > -0.5 * rise else 0
 
 
+@njit_cached(inline="always")
+def _lift_step(use, use_noise):
+    """The lift test's grip factor [-]: a held load's nu falls by log(factor) = six of nu's noise margins, so the
+    verdict halfway clears three; within 1 + LIFT_STEP_LEAST ... 1 + LIFT_STEP."""
+    return _first_max(_first_min(math.exp(6.0 * use_noise / use), 1.0 + LIFT_STEP), 1.0 + LIFT_STEP_LEAST)
+
+
 @njit_cached
 def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noise, use_spread, full, frames,
                at_minimum):
@@ -138,9 +150,14 @@ def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noi
     runs when nu has sat still at the level or above while the grip grew by LIFT_GROWTH over the window: bumps that
     slide at a friction just above the level keep nu = mu and the demand creeps up with the grip. It starts only
     where the lift's stall test cannot see: blind in its noise, or not judging at all because the grip is at the
-    contact minimum (``at_minimum``: the stall test judges only a load-driven grip)."""
+    contact minimum (``at_minimum``: the stall test judges only a load-driven grip). It also starts, whatever nu
+    does, where a probe that could not rely on its bump test did not start (LIFT_ASKED, ``_carry_step``): nu read
+    at the level is a held load's or one sliding at a friction read there, and only the step tells them apart - a
+    step sized to nu's noise there (``_lift_step``). A step the sensed grip does not follow by twice force_drop
+    gives no verdict, which is not 'held': after a whole window without one the grip steps up again by the same factor,
+    up to the actuator's limit, where the test ends (nothing is left to step)."""
     level = parameters[P_LIFT_SAFETY] * scalars[X_FRICTION]
-    if scalars[X_LIFT_TEST] == LIFT_UNTRIED:
+    if scalars[X_LIFT_TEST] == LIFT_UNTRIED or scalars[X_LIFT_TEST] == LIFT_ASKED:
         still = abs(use_now[0] - use_then[0]) <= use_noise
         below = max(use_now[0], use_then[0]) + use_noise < level
         creeping = (use_now[0] >= level - use_noise and use_spread <= use_noise
@@ -149,26 +166,47 @@ def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noi
         # it does not judge at all - the grip at the contact minimum (a quiet array's margin is small there, and an
         # object sliding at that grip was seen by neither test)
         stall_cannot_see = use_noise > 2.0 * parameters[P_STALL_RISE] * use_now[0] or at_minimum
-        if (scalars[X_PHASE] == LIFT and scalars[X_PROBING] == 0.0 and use_now[1] > 0.0
+        if ((scalars[X_PHASE] == LIFT and scalars[X_PROBING] == 0.0 and use_now[1] > 0.0
                 and full and MINIMUM_FRICTION < use_then[0] and MINIMUM_FRICTION < use_now[0]
-                and stall_cannot_see and still and (below or creeping)):
+                and stall_cannot_see and still and (below or creeping))
+                or (scalars[X_LIFT_TEST] == LIFT_ASKED and use_now[1] > 0.0 and full
+                    and MINIMUM_FRICTION < use_now[0])):
+            scalars[X_LIFT_STEP] = _lift_step(use_now[0], use_noise) if scalars[X_LIFT_TEST] == LIFT_ASKED \
+                else 1.0 + LIFT_STEP
             scalars[X_LIFT_TEST], scalars[X_LIFT_FRAMES], scalars[X_LIFT_HELD] = LIFT_STEPPED, 0.0, 0.0
+            scalars[X_LIFT_UNJUDGED] = 0.0
             # the step's reference grip: the command in the sensed scale, which the slowly filtered grip lags when
             # the grip was growing (the lag would pass for part of the step's rise)
             scalars[X_LIFT_USE] = use_now[0]
             scalars[X_LIFT_GRIP] = _first_max(use_now[1], scalars[X_COMMAND] / _force_scale(scalars))
-            scalars[X_LIFT_HOLD] = _first_min(scalars[X_COMMAND] * (1.0 + LIFT_STEP), parameters[P_MAXIMUM_FORCE])
+            scalars[X_LIFT_HOLD] = _first_min(scalars[X_COMMAND] * scalars[X_LIFT_STEP], parameters[P_MAXIMUM_FORCE])
             scalars[X_COMMAND] = scalars[X_LIFT_HOLD]
     elif scalars[X_LIFT_TEST] == LIFT_STEPPED:
         scalars[X_LIFT_FRAMES] += 1.0
         if scalars[X_LIFT_FRAMES] >= frames:            # judged each frame until held, or the slip is confirmed
-            if _load_follows_grip(parameters, use_now[0], use_now[1], scalars[X_LIFT_USE], scalars[X_LIFT_GRIP]) > 0:
+            verdict = _load_follows_grip(parameters, use_now[0], use_now[1], scalars[X_LIFT_USE], scalars[X_LIFT_GRIP])
+            if verdict > 0:
                 signature[1, count] = True
-                scalars[X_LIFT_HELD] = 0.0
-            else:
+                scalars[X_LIFT_HELD] = scalars[X_LIFT_UNJUDGED] = 0.0
+            elif verdict == 0:
+                scalars[X_LIFT_UNJUDGED] = 0.0
                 scalars[X_LIFT_HELD] += 1.0
                 if scalars[X_LIFT_HELD] >= parameters[P_CONFIRM_FRAMES]:
                     scalars[X_LIFT_TEST] = LIFT_DONE
+            else:
+                # no verdict: the sensed grip did not follow the step (at the contact minimum the estimated force
+                # resolves it poorly). Not seen is not held: after a whole window without one the grip steps up
+                # again - unless it is at the actuator's limit, where nothing is left to step and the test ends
+                scalars[X_LIFT_HELD] = 0.0
+                scalars[X_LIFT_UNJUDGED] += 1.0
+                if scalars[X_LIFT_UNJUDGED] >= frames:
+                    scalars[X_LIFT_UNJUDGED] = 0.0
+                    if scalars[X_LIFT_HOLD] >= SATURATED * parameters[P_MAXIMUM_FORCE]:
+                        scalars[X_LIFT_TEST] = LIFT_DONE
+                    else:
+                        scalars[X_LIFT_HOLD] = _first_min(scalars[X_LIFT_HOLD] * scalars[X_LIFT_STEP],
+                                                          parameters[P_MAXIMUM_FORCE])
+                        scalars[X_COMMAND] = _first_max(scalars[X_COMMAND], scalars[X_LIFT_HOLD])
 
 
 @njit_cached
@@ -287,7 +325,8 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
         parameters[P_STALL_RISE], parameters[P_STALL_FRACTION])
     if scalars[X_PROBE_BEGUN] == 0.0:                 # read once, when the probe begins (_carry_step)
         scalars[X_VISIBLE] = _visible_bumps(parameters, signals[SLOW], magnitudes, contact, noise, largest, mean_force)
-    if not seen and (scalars[X_PHASE] == LIFT or scalars[X_LIFT_TEST] == LIFT_STEPPED):
+    if not seen and (scalars[X_PHASE] == LIFT or scalars[X_LIFT_TEST] == LIFT_STEPPED
+                     or scalars[X_LIFT_TEST] == LIFT_ASKED):
         # nu's spread over the window (largest less smallest, this frame's included), for a test yet to start
         low = high = use_now[0]
         if scalars[X_LIFT_TEST] == LIFT_UNTRIED:
@@ -445,10 +484,16 @@ def _carry_step(parameters, scalars, plateau, streak, period):
         # the bump test is not used: that probe watches the total alone)
         blind = parameters[P_ROTATIONAL] > 0.0 and scalars[X_VISIBLE] < BLIND_BELOW
         scalars[X_PROBING] = 0.0 if scalars[X_CARRY_SLIP] > 0.0 or blind else 1.0
+        # the grip a blind probe leaves where the lift left it is tested once instead, if no lift test ran: a grasp
+        # sliding at a friction read at the lift's level looks, to nu and to the demand, like one held there
+        if blind and scalars[X_CARRY_SLIP] == 0.0 and scalars[X_LIFT_TEST] == LIFT_UNTRIED:
+            scalars[X_LIFT_TEST] = LIFT_ASKED
         if scalars[X_PROBING] > 0.0:        # the probe's margin is the hold's: mu_hat starts where the grip is
             scalars[X_FRICTION] *= parameters[P_LIFT_SAFETY] / parameters[P_SAFETY]
             scalars[X_PROBED] = 0.0
-    if scalars[X_PROBING] > 0.0:
+    # the probe waits while a lift test holds its step: mu_hat raised under a grip held up would drop it at once,
+    # unwatched, to the demand at an unchecked mu_hat when the test ends
+    if scalars[X_PROBING] > 0.0 and scalars[X_LIFT_TEST] != LIFT_STEPPED:
         scalars[X_PROBED] += period
         scalars[X_FRICTION] = _first_min(scalars[X_FRICTION] * math.exp(parameters[P_PROBE_RATE] * period),
                                          parameters[P_MAXIMUM_FRICTION])

@@ -19,34 +19,35 @@ F_need = |F_t| / (s mu_hat): blind to the moment. The command tracks F_need with
 never below the minimum contact force F_min.
 
 Friction estimate: probe and watch. Before any slip was seen mu_hat is ``prior_friction``, the lowest friction the
-gripper is designed for, with a wider margin (``lift_safety_fraction``: the load grows in the lift faster than the
-grip follows). From ``probe_delay`` after the lift's start (through the rest of the lift and the hold) the law
-probes: it raises mu_hat by ``probe_rate`` per second (the grip falls
-the same way) while it watches how each loaded bump's load ratio answers its falling normal force over the last
-``watch_frames`` frames. A stuck bump keeps its load (equilibrium fixes it; its share moves with its stiffness,
-~ P_i^(1/3), when the normal forces redistribute), so its ratio rises at least like P_i^-(2/3); a bump on its
-friction limit keeps |rho_i| = mu while P_i falls: when P_i has fallen by ``force_drop`` over the window and
-|rho_i| plus its noise margin rose less than P_i^-``stick_exponent`` (just under the stuck bound 2/3, so that
-the gap between the two, ~8 % of |rho_i| over a 25-frame window of the probe, clears the noise margin), for
-``confirm_frames`` frames, that bump slides. Once two bumps of one fingertip slide, the ratio |rho_i| that two of
-them reach (the second largest) is the friction coefficient of this object measured in hand: each sliding bump sits
-at mu, but each reading carries the estimator's own error for that bump (its model is not the plant's), and the
+gripper is designed for, with a wider margin (``lift_safety_fraction``: the load grows in the lift faster than the grip
+follows). From ``probe_delay`` after the lift's start (through the rest of the lift and the hold) the law probes: it
+raises mu_hat by ``probe_rate`` per second (the grip falls the same way) while it watches how each loaded bump's load
+ratio answers its falling normal force over the last ``watch_frames`` frames. A stuck bump keeps its load (equilibrium
+fixes it; its share moves with its stiffness, ~ P_i^(1/3), when the normal forces redistribute), so its ratio rises at
+least like P_i^-(2/3); a bump on its friction limit keeps |rho_i| = mu while P_i falls: when P_i has fallen by
+``force_drop`` over the window and |rho_i| plus its noise margin rose less than P_i^-``stick_exponent`` (just under the
+stuck bound 2/3, so that the gap between the two, ~8 % of |rho_i| over a 25-frame window of the probe, clears the noise
+margin), for ``confirm_frames`` frames, that bump slides. Once two bumps of one fingertip slide, the ratio |rho_i| that
+two of them reach (the second largest) is the friction coefficient of this object measured in hand: each sliding bump
+sits at mu, but each reading carries the estimator's own error for that bump (its model is not the plant's), and the
 largest of several readings over-reads mu - a hold whose margin that eats lets the object creep. mu_hat takes it, the
-probe ends and the grip steps up at once to the demand at s mu_hat. Under a moment the bumps far from the array's
-slip centre slide first while the others hold (incipient rotational slip). Under pure weight all slide together,
-which shows sooner in the total tangential load of both fingertips (in one frame): equilibrium keeps it constant
-while the object holds, and a fall by ``total_drop`` together with the normal force is the grasp sliding as a whole
-(at its limit the array's utilisation nu is mu: mu_hat takes it). After the probe the total load is still
-watched: a gross slip seen later (the load grew, or mu_hat was too high) lowers mu_hat and steps the grip up again.
-Single bumps are judged only while the grip is probed down: at a held grip a bump's force changes only as the normal
-forces redistribute, not as the controller asks. A probe whose bump test cannot be relied on to see a bump slide does
-not start: over a window the probe opens a gap of |rho_i| (exp(``stick_exponent`` ``probe_rate`` window) - 1) between
-a stuck bump's ratio and a sliding one's; where neither fingertip has two watched bumps whose noise margin lies below
-that gap (a light object: small tangential loads per bump against the sensor's noise), a sliding bump is flagged only
-if its read ratio happens to fall as the loads shift, and where it was not, the probe ran on through incipient slip
-until the grasp slid as a whole. The grip then stays where the lift left it, at mu_hat = ``prior_friction`` with the
-lift's margin: more grip, the friction not measured (docs/design.md, sec. 12). Without rotational detection the bump
-test is not used; that probe starts as before and watches the total alone.
+probe ends and the grip steps up at once to the demand at s mu_hat. Under a moment the bumps far from the array's slip
+centre slide first while the others hold (incipient rotational slip). Under pure weight all slide together, which shows
+sooner in the total tangential load of both fingertips (in one frame): equilibrium keeps it constant while the object
+holds, and a fall by ``total_drop`` together with the normal force is the grasp sliding as a whole (at its limit the
+array's utilisation nu is mu: mu_hat takes it). After the probe the total load is still watched: a gross slip seen later
+(the load grew, or mu_hat was too high) lowers mu_hat and steps the grip up again. Single bumps are judged only while
+the grip is probed down: at a held grip a bump's force changes only as the normal forces redistribute, not as the
+controller asks. A probe whose bump test cannot be relied on to see a bump slide does not start: over a window the probe
+opens a gap of |rho_i| (exp(``stick_exponent`` ``probe_rate`` window) - 1) between a stuck bump's ratio and a sliding
+one's; where neither fingertip has two watched bumps whose noise margin lies below that gap (a light object: small
+tangential loads per bump against the sensor's noise), a sliding bump is flagged only if its read ratio happens to fall
+as the loads shift, and where it was not, the probe ran on through incipient slip until the grasp slid as a whole. The
+grip then stays where the lift left it, at mu_hat = ``prior_friction`` with the lift's margin: more grip, the friction
+not measured (docs/design.md, sec. 12). Where no lift test ran, that grip is tested once, as the lift's test does
+(below), with a step sized to the utilisation's noise: a grasp sliding at a friction the sensor reads at the lift's
+level asks, like a held one, for the grip it has. Without rotational detection the bump test is not used; that probe
+starts as before and watches the total alone.
 
 Lift test (once per lift, before any slip was seen). Below the lift's level (mu_hat x ``lift_safety_fraction``) sliding
 bumps carry only mu of the grip, so the demand never asks for more and the grip stays where it is - at the contact
@@ -57,18 +58,21 @@ utilisation that has sat below the level for a window, neither rising nor fallin
 (``_slip_law.LIFT_STEP``) and is held there for a window. Held, the load stays and nu falls like 1 / P; sliding, the
 load follows the grip and nu stays: halfway between is the verdict (no margin towards 'held', docs/design.md sec. 12).
 Sliding marks the array's slip (mu_hat = nu, the grip steps up as after any slip); held lets the grip back to its
-demand. The step is the safe direction. Just above the level the same blindness hides a slide the other way: bumps that
-slide at a friction a little above the level keep nu at mu, so the demand asks only mu / level more than the grip and
-the grip creeps up while the object slides (a bottle at mu 0.32 slid 35 mm in the lift). A grip that grew by
-``_slip_law.LIFT_GROWTH`` over the window while nu sat still at the level or above is tested the same way (its reference
-grip is the command in the sensed scale: the slowly filtered grip lags a growing one, and the lag would pass for a
-rise). After a slip seen in the lift, while the array still slides, the demand grows from the command at nu = mu_hat
-rather than from the slowly filtered grip at the nu it reads: that filter keeps the object's swing out of the demand,
-but it lags a grip that must grow several-fold, and an array that slides is at its limit whatever it reads (an estimator
-whose scale error changes with the force reads it below the mu_hat its slip set). It still slides while its nu does not
-fall with the growing grip - halfway between held and sliding, as the lift's test - over the last ``SLIDE_WINDOW`` of
-the fast signals, or, where the grip grew too little there for a verdict, over the window of the slow ones once that
-lies after the fast test's last 'held'; with no verdict, while nu reads at least mu_hat.
+demand. A step the sensed grip does not follow (at the contact minimum the estimated force resolves it poorly) gives no
+verdict, and no verdict is not 'held': after a whole window without one the grip steps up again (up to the actuator's
+limit, where the test ends; the probe waits while a test holds its step). The step is the safe direction. Just above the
+level the same blindness hides a slide the other way: bumps that slide at a friction a little above the level keep nu at
+mu, so the demand asks only mu / level more than the grip and the grip creeps up while the object slides (a bottle at mu
+0.32 slid 35 mm in the lift). A grip that grew by ``_slip_law.LIFT_GROWTH`` over the window while nu sat still at the
+level or above is tested the same way (its reference grip is the command in the sensed scale: the slowly filtered grip
+lags a growing one, and the lag would pass for a rise). After a slip seen in the lift, while the array still slides, the
+demand grows from the command at nu = mu_hat rather than from the slowly filtered grip at the nu it reads: that filter
+keeps the object's swing out of the demand, but it lags a grip that must grow several-fold, and an array that slides is
+at its limit whatever it reads (an estimator whose scale error changes with the force reads it below the mu_hat its slip
+set). It still slides while its nu does not fall with the growing grip - halfway between held and sliding, as the lift's
+test - over the last ``SLIDE_WINDOW`` of the fast signals, or, where the grip grew too little there for a verdict, over
+the window of the slow ones once that lies after the fast test's last 'held'; with no verdict, while nu reads at least
+mu_hat.
 
 A lift's grip pinned at the actuator's limit (``maximum_force``) is not judged by the lift's stall test: a load still
 coming on keeps nu where it is at a grip that cannot follow, held or sliding alike. The probe, later, finds the
