@@ -130,8 +130,8 @@ def _load_follows_grip(parameters, now_use, now_grip, then_use, then_grip):
 
 @njit_cached(inline="always")
 def _lift_step(use, use_noise):
-    """The lift test's grip factor [-]: a held load's nu falls by log(factor) = six of nu's noise margins, so the
-    verdict halfway clears three; within 1 + LIFT_STEP_LEAST ... 1 + LIFT_STEP."""
+    """The grip factor [-] of the lift test a blind probe asks for: a held load's nu falls by log(factor) = six of
+    nu's noise margins, so the verdict halfway clears three; within 1 + LIFT_STEP_LEAST ... 1 + LIFT_STEP."""
     return _first_max(_first_min(math.exp(6.0 * use_noise / use), 1.0 + LIFT_STEP), 1.0 + LIFT_STEP_LEAST)
 
 
