@@ -480,15 +480,26 @@ def test_a_lift_step_that_never_gets_a_verdict_ends_at_the_actuators_limit():
     assert grips.max() == pytest.approx(limit) and grips[-1] < 0.1 * limit
 
 
-def test_the_blind_probes_step_is_sized_to_the_utilisations_noise():
-    """``_lift_step``: a held load's nu falls by log(step) = six of nu's noise margins, within 1.15 ... 1.5 - the
-    least a verdict sees (twice force_drop, 8 %, with room), the most the lift test itself steps."""
-    from controller.control._slip_law import LIFT_STEP, LIFT_STEP_LEAST, _lift_step
+@pytest.mark.parametrize("noise", [0.003, 0.015])
+def test_the_blind_probes_step_is_sized_to_the_utilisations_noise(noise):
+    """``_lift_step``: a held load's nu falls by log(step) = six of nu's noise margins, within 1.15 ... 1.5 - the least
+    a verdict sees (twice force_drop, 8 %, with room), the most the lift test itself steps. Judged by the law's own
+    verdict (``_load_follows_grip``, halfway between held and sliding) at nu = 0.3: a held load read a noise margin
+    high is still 'held', a sliding one read a noise margin low still 'sliding' - at 0.003 on the 1.15 floor, at 0.015
+    a step of exp(0.3) = 1.35."""
+    from controller.control._slip_law import LIFT_STEP, LIFT_STEP_LEAST, _lift_step, _load_follows_grip
+    from controller.control.incipient_slip import law_parameters
 
-    assert _lift_step.py_func(0.3, 0.003) == pytest.approx(1.0 + LIFT_STEP_LEAST)         # exp(0.06): the floor
-    assert _lift_step.py_func(0.3, 0.015) == pytest.approx(math.exp(0.3))                 # between: 1.35
-    assert _lift_step.py_func(0.3, 0.1) == pytest.approx(1.0 + LIFT_STEP)                 # exp(2): the cap
-    assert 1.0 + LIFT_STEP_LEAST > 1.0 + 2.0 * IncipientSlipParameters().force_drop
+    parameters = law_parameters(IncipientSlipParameters(), TIP.centres)
+    use, grip = 0.3, 1.0
+    step = _lift_step.py_func(use, noise)
+    assert 1.0 + LIFT_STEP_LEAST <= step <= 1.0 + LIFT_STEP
+    assert step == pytest.approx(max(math.exp(6.0 * noise / use), 1.0 + LIFT_STEP_LEAST))
+    margin = math.exp(noise / use)
+    held = _load_follows_grip.py_func(parameters, use / step * margin, grip * step, use, grip)
+    sliding = _load_follows_grip.py_func(parameters, use / margin, grip * step, use, grip)
+    assert (held, sliding) == (0, 1)
+    assert 1.0 + LIFT_STEP_LEAST > 1.0 + 2.0 * IncipientSlipParameters().force_drop     # a step the verdict judges
 
 
 class ReadLowPlant(QuasiStaticPlant):

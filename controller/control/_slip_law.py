@@ -166,13 +166,12 @@ def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noi
         # it does not judge at all - the grip at the contact minimum (a quiet array's margin is small there, and an
         # object sliding at that grip was seen by neither test)
         stall_cannot_see = use_noise > 2.0 * parameters[P_STALL_RISE] * use_now[0] or at_minimum
-        if ((scalars[X_PHASE] == LIFT and scalars[X_PROBING] == 0.0 and use_now[1] > 0.0
-                and full and MINIMUM_FRICTION < use_then[0] and MINIMUM_FRICTION < use_now[0]
-                and stall_cannot_see and still and (below or creeping))
-                or (scalars[X_LIFT_TEST] == LIFT_ASKED and use_now[1] > 0.0 and full
-                    and MINIMUM_FRICTION < use_now[0])):
-            scalars[X_LIFT_STEP] = _lift_step(use_now[0], use_noise) if scalars[X_LIFT_TEST] == LIFT_ASKED \
-                else 1.0 + LIFT_STEP
+        readable = use_now[1] > 0.0 and full and MINIMUM_FRICTION < use_now[0]
+        asked = scalars[X_LIFT_TEST] == LIFT_ASKED
+        unseen = (scalars[X_PHASE] == LIFT and scalars[X_PROBING] == 0.0 and MINIMUM_FRICTION < use_then[0]
+                  and stall_cannot_see and still and (below or creeping))
+        if readable and (asked or unseen):
+            scalars[X_LIFT_STEP] = _lift_step(use_now[0], use_noise) if asked else 1.0 + LIFT_STEP
             scalars[X_LIFT_TEST], scalars[X_LIFT_FRAMES], scalars[X_LIFT_HELD] = LIFT_STEPPED, 0.0, 0.0
             scalars[X_LIFT_UNJUDGED] = 0.0
             # the step's reference grip: the command in the sensed scale, which the slowly filtered grip lags when
