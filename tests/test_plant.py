@@ -133,7 +133,7 @@ def test_bench_fit_recovers_a_plant_of_its_own_form():
 
 def test_the_estimator_does_not_know_the_plant():
     # the belief is fitted on a nominal bench build; the FEM plant is not of its form. Held-out bench states of
-    # another build: a few per cent off on the FEM plane (measured 3.8 % force, 0.025 ratio; the bound 1.5x for the
+    # another build: a few per cent off on the FEM plane (measured 5.2 % force, 0.036 ratio; the bound 1.5x for the
     # node draws), exact to the bench's 1 mN noise on the MODEL plane; a 10 % wider kernel the bench never saw
     # costs the FEM estimator more
     from controller.closed_loop._bench import belief_errors
@@ -141,7 +141,7 @@ def test_the_estimator_does_not_know_the_plant():
     fem = belief_errors(SensorPlane.FEM)
     known = belief_errors(SensorPlane.MODEL)
     wider = belief_errors(SensorPlane.FEM, PlantFactors(kernel_width=0.1))
-    assert 0.01 < fem["force"] < 0.06 and 0.005 < fem["ratio"] < 0.04
+    assert 0.01 < fem["force"] < 0.08 and 0.005 < fem["ratio"] < 0.055
     assert known["force"] < 1e-3 and known["ratio"] < 1e-3
     assert wider["force"] > 2.0 * fem["force"] and wider["ratio"] > 2.0 * fem["ratio"]
     assert math.isfinite(fem["ratio_relative"])

@@ -2,11 +2,11 @@
 fingertip - never a trial's own, perturbed one - and what the estimator keeps of it.
 
 On the FEM plane the sensor model is fitted to the bench's readings (``controller.estimation.fit_sensor_belief``:
-presses at 1-16 N and shears of 0.3 and 0.6 of the force along x and y, 20 averaged frames each, rest records for
-the offsets); the records of the paper's estimator (unsheared presses at 40 forces for the CoP reference, small
-shifts for its gain) and of the displacement-target law's design are kept for each trial's own noise gate. On the
-MODEL plane (the known world) the estimator's model is the reduced model itself and the records are noise-free, as
-in earlier rounds. Computed once per plane, design and array in a process (a few seconds).
+presses at 1-32 N (the range the grip is driven over) and shears of 0.3 and 0.6 of the force along x and y, 20 averaged
+frames each, rest records for the offsets); the records of the paper's estimator (unsheared presses at 40 forces for the
+CoP reference, small shifts for its gain) and of the displacement-target law's design are kept for each trial's own
+noise gate. On the MODEL plane (the known world) the estimator's model is the reduced model itself and the records are
+noise-free, as in earlier rounds. Computed once per plane, design and array in a process (a few seconds).
 
 The bench is of a design: by default the shipped 3x3 fingertip on the paper's array; ``model`` (a ``PlantModel``,
 any design calibrated on its own FEM) and ``array`` (the design's sensor) make it the bench of another design, whose
@@ -35,7 +35,7 @@ BENCH_SEED = 8                  # the bench fingertip's own node draws and noise
 BENCH_NOISE = 0.001             # N rms per node at small pressure: the array type the trials use
 BENCH_FRAMES = 20               # frames averaged per bench state (0.2 s at 100 Hz)
 REST_RECORDS = 5
-FIT_FORCES = (1.0, 2.0, 4.0, 8.0, 16.0)                # N on the whole fingertip
+FIT_FORCES = (1.0, 2.0, 4.0, 8.0, 16.0, 32.0)          # N on the whole fingertip: the drive's range (to 30 N)
 FIT_RATIOS = (0.3, 0.6)                                # Q / P of the fit's shears (the bench plate has mu = 1)
 REFERENCE_FORCES = tuple(np.geomspace(0.1, 60.0, 40))  # N: the unsheared CoP table of the paper's estimator
 SMALL_SHIFTS = (0.0, 0.01, 0.02)                       # mm along x at REFERENCE_FORCE: its scalar CoP gain
@@ -171,11 +171,12 @@ def _design_pairs(plane, friction, load_ratio, torque_ratio, force, rig) -> dict
     return pairs
 
 
-# held-out bench states no fit saw: other forces, a diagonal shear, twists, shear with twist (force control, mu = 1)
+# held-out bench states no fit saw (force control, mu = 1): other forces, a diagonal shear, twists, shear with twist,
+# up to 24 N
 HELD_OUT_LOADS = (BenchLoad("press", 3.0), BenchLoad("press", 12.0), BenchLoad("shear", 5.0, (1.5, 1.5)),
                   BenchLoad("shear", 10.0, (-4.0, 2.0)), BenchLoad("twist", 6.0, torque=30.0),
                   BenchLoad("twist", 12.0, torque=-50.0), BenchLoad("shear", 12.0, (-4.0, 2.0), -20.0),
-                  BenchLoad("shear", 3.0, (0.0, -1.5), 8.0))
+                  BenchLoad("shear", 3.0, (0.0, -1.5), 8.0), BenchLoad("shear", 24.0, (-6.0, 4.0), 40.0))
 
 
 def belief_errors(plane: SensorPlane = SensorPlane.FEM, factors: PlantFactors = PlantFactors(), seed: int = 1,
