@@ -147,6 +147,36 @@ def test_the_estimator_does_not_know_the_plant():
     assert math.isfinite(fem["ratio_relative"])
 
 
+
+def test_the_plant_and_the_bench_cover_the_drive_and_read_a_twist_alike_across_it():
+    # the packaged fields reach the finger drive's 30 N (beyond its last level a field holds its end value), and the
+    # bench-fitted estimator follows the plant's tangential loads under a fixed twist from 16 to 28 N: on average
+    # over the twisted bumps read and plant change alike to 4 %, half the drift the old ranges gave (fields to 18 N in
+    # shear, bench to 16 N: +8.2 %, each bump +4.7 ... +9.9 %; measured now -1.8 %, each bump -4.8 ... +0.6 %)
+    from contact.reduced.base_response import PACKAGED_BASE_RESPONSE, BaseResponse
+    from controller.closed_loop._bench import BENCH_NOISE, REST_RECORDS, estimator_bench
+    from controller.closed_loop._sensing import SensingChain
+    from controller.control import IncipientSlipParameters
+    from controller.plant.bench_rig import BenchLoad, rig_states, run_bench
+
+    response, drive = BaseResponse.load(PACKAGED_BASE_RESPONSE), IncipientSlipParameters().maximum_force
+    reach = (1.0 - 1e-6) * drive / len(response.centres)                 # per bump; the levels are stored to 1e-6
+    assert response.normal_levels[-1] >= reach and response.shear_levels[-1] >= reach
+    plant = FingertipPlant(PlantFactors(), noise=BENCH_NOISE, seed=3, plane=SensorPlane.FEM)
+    chain = SensingChain(estimator_bench(SensorPlane.FEM))
+    rest = run_bench(plant, [BenchLoad("rest") for _ in range(REST_RECORDS)], 20, seed=4)
+    chain.tare(np.stack([np.stack([r.readings.ravel()] * 2) for r in rest]))
+    loads = {}
+    for force in (16.0, 28.0):
+        load = BenchLoad("twist", force, torque=110.0)
+        truth = rig_states(plant, load)
+        normal, ratio, _ = chain.bump_loads(run_bench(plant, [load], 100, seed=5)[0].readings.ravel())
+        loads[force] = (np.linalg.norm(truth[:, 1:3], axis=1), np.linalg.norm(ratio[0], axis=1) * normal[0])
+    twisted = loads[16.0][0] > 0.1 * loads[16.0][0].max()             # the centre bump carries no twist
+    plant_change = loads[28.0][0][twisted] / loads[16.0][0][twisted]
+    read_change = loads[28.0][1][twisted] / loads[16.0][1][twisted]
+    assert abs(np.mean(read_change / plant_change) - 1.0) < 0.04
+
 def test_plant_and_estimator_share_no_arrays():
     # what the loop's estimator holds is computed from bench records; none of it is the plant's own table
     from controller.closed_loop._bench import estimator_bench
