@@ -201,12 +201,12 @@ def test_the_controller_sees_only_sensor_signals_and_the_phase():
     the law (the wrapper and its compiled kernels) import no plant, world or contact model, name no plant quantity
     and read no attribute by a computed name (getattr(settings, "friction_" + "coefficient") would pass a name
     check)."""
-    from controller.control import _slip_kernels, _slip_law, incipient_slip
+    from controller.control import _lift_test, _slip_kernels, _slip_law, _slip_state, incipient_slip
 
     observe = list(inspect.signature(IncipientSlipController.observe).parameters)
     step = list(inspect.signature(IncipientSlipController.step).parameters)
     assert observe == ["self", "bump_force", "load_ratio", "in_contact", "ratio_noise"] and step == ["self", "phase"]
-    for module in (incipient_slip, _slip_law, _slip_kernels):
+    for module in (incipient_slip, _slip_law, _slip_state, _lift_test, _slip_kernels):
         tree = ast.parse(inspect.getsource(module))
         imported = {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)} | \
             {alias.name for node in ast.walk(tree) if isinstance(node, ast.Import) for alias in node.names}
@@ -487,7 +487,7 @@ def test_the_blind_probes_step_is_sized_to_the_utilisations_noise(noise):
     verdict (``_load_follows_grip``, halfway between held and sliding) at nu = 0.3: a held load read a noise margin
     high is still 'held', a sliding one read a noise margin low still 'sliding' - at 0.003 on the 1.15 floor, at 0.015
     a step of exp(0.3) = 1.35."""
-    from controller.control._slip_law import LIFT_STEP, LIFT_STEP_LEAST, _lift_step, _load_follows_grip
+    from controller.control._lift_test import LIFT_STEP, LIFT_STEP_LEAST, _lift_step, _load_follows_grip
     from controller.control.incipient_slip import law_parameters
 
     parameters = law_parameters(IncipientSlipParameters(), TIP.centres)

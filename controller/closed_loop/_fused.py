@@ -17,7 +17,8 @@ import math
 import numpy as np
 from fem.compiled import njit_cached
 
-from controller.control._slip_law import APPROACH, RELEASE, X_FRICTION, X_TIME, control_step, observe_frame
+from controller.control._slip_law import control_step, observe_frame
+from controller.control._slip_state import APPROACH, RELEASE, X_FRICTION, X_TIME
 from controller.plant._sensor_kernel import plant_readings
 
 from . import _kernel as K

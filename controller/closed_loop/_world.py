@@ -19,7 +19,7 @@ from controller.control.grasp_force_control import GraspForceController, GraspFo
 from controller.control.incipient_slip import IncipientSlipController, IncipientSlipParameters
 from controller.control.references import GraspPhase
 
-from controller.control._slip_law import PHASE_CODES, SLIP_KINDS
+from controller.control._slip_state import PHASE_CODES, SLIP_KINDS
 from controller.plant.fingertip_plant import FingertipPlant
 
 from . import _fused as F

@@ -1,5 +1,6 @@
 """The incipient-slip law (``controller.control.incipient_slip``, whose docstring states it) as compiled kernels on
-the controller's state arrays: ``observe_frame`` at each sensor frame, ``control_step`` at each control step.
+the controller's state arrays: ``observe_frame`` at each sensor frame, ``control_step`` at each control step (the
+arrays' slots are ``_slip_state``'s, the lift's test is ``_lift_test``'s).
 
 This is the one source of the law: ``IncipientSlipController`` is a thin Python wrapper that owns the arrays and
 calls these kernels, and the closed loop's fused frame loop (``controller.closed_loop._fused``) calls the same
@@ -14,64 +15,27 @@ import math
 import numpy as np
 from fem.compiled import njit_cached
 
+from ._lift_test import (LIFT_UNTRIED, LIFT_STEPPED, LIFT_DONE, LIFT_ASKED, _load_follows_grip, _lift_test)
 from ._slip_kernels import fingertip_need, low_pass_frame, slip_signature, watched
-from .references import GraspPhase
+from ._slip_state import (APPROACH, ARRAY_SLIP, AT_MINIMUM, BUMP_SLIP, FAST, FAST_PREVIOUS, GROSS_SLIP, HOLD, LIFT,
+                          MINIMUM_FRICTION, NO_SLIP, PLACE, P_APPROACH_FORCE, P_CONFIRM_FRAMES, P_FAST_GAIN,
+                          P_FORCE_DROP, P_FORCE_SHARE, P_FULL_SEARCH_EVERY, P_GROSS_FRAMES, P_LIFT_SAFETY,
+                          P_LOADED_SHARE, P_LOOP_RATE, P_MAXIMUM_FORCE, P_MAXIMUM_FRICTION, P_NOISE_MARGIN, P_PERIOD,
+                          P_PROBE_DELAY, P_PROBE_RATE, P_RAMP_RATE, P_REACH, P_RELEASE_LOOP_RATE, P_RELEASE_RATE,
+                          P_ROTATIONAL, P_SAFETY, P_SCALE_GAIN, P_SLIDE_FRAMES, P_SLOW_GAIN, P_STALL_FRACTION,
+                          P_STALL_RISE, P_STICK_EXPONENT, P_TOTAL_DROP, P_WARM_STEP, P_WATCH_TIME, RATIO_NOISE, RELEASE,
+                          SATURATED, SLOW, SLOW_PREVIOUS, X_CARRY_SLIP, X_CARRY_TIME, X_COMMAND, X_COMMAND_MEAN,
+                          X_CONTACTS, X_FRAMES, X_FRICTION, X_GRIP, X_HISTORY, X_LIFT_HOLD, X_LIFT_TEST, X_MINIMUM,
+                          X_NEED, X_PHASE, X_PLACE_FORCE, X_PROBED, X_PROBE_BEGUN, X_PROBING, X_RELEASE_FORCE,
+                          X_RELEASE_NEED, X_RELEASING, X_SENSED, X_SENSED_MEAN, X_SENSED_SLOW, X_SLIDING, X_SLID_GRIP,
+                          X_SLID_HELD, X_SLID_USE, X_SLIP_SEEN, X_STARTED, X_TIME, X_USE_SLOW, X_VISIBLE, X_WATCHING,
+                          _ema, _first_max, _first_min, _force_scale)
 
-__all__ = ["observe_frame", "control_step", "PHASE_CODES", "SLIP_KINDS"]
+__all__ = ["observe_frame", "control_step"]
 
-PHASE_CODES = {phase: code for code, phase in enumerate(GraspPhase)}     # GraspPhase -> int for compiled code
-APPROACH, GRASP, LIFT, HOLD, PLACE, RELEASE = (PHASE_CODES[phase] for phase in GraspPhase)
-
-# --- scalar state slots ---------------------------------------------------------------------------------------
-(X_COMMAND, X_MINIMUM, X_FRICTION, X_PROBING, X_SLIP_SEEN, X_NEED, X_TIME, X_STARTED, X_CONTACTS, X_WATCHING,
- X_PROBE_BEGUN, X_CARRY_TIME, X_RELEASING, X_RELEASE_NEED, X_RELEASE_FORCE, X_FRAMES, X_HISTORY, X_PHASE, X_GRIP,
- X_CARRY_SLIP, X_SENSED, X_COMMAND_MEAN, X_SENSED_MEAN, X_USE_SLOW, X_SENSED_SLOW, X_PROBED, X_LIFT_TEST,
- X_LIFT_FRAMES, X_LIFT_USE, X_LIFT_GRIP, X_LIFT_HOLD, X_LIFT_HELD, X_SLID_USE, X_SLID_GRIP, X_SLIDING,
- X_SLID_HELD, X_PLACE_FORCE, X_VISIBLE, X_LIFT_STEP, X_LIFT_UNJUDGED, X_SIZE) = range(41)
-# --- parameter slots --------------------------------------------------------------------------------------------
-(P_PERIOD, P_FAST_GAIN, P_SLOW_GAIN, P_APPROACH_FORCE, P_RAMP_RATE, P_MAXIMUM_FORCE, P_LOOP_RATE,
- P_RELEASE_LOOP_RATE, P_SAFETY, P_LIFT_SAFETY, P_PRIOR_FRICTION, P_MAXIMUM_FRICTION, P_PROBE_RATE, P_PROBE_DELAY,
- P_TOTAL_DROP, P_WATCH_TIME, P_FORCE_DROP, P_STICK_EXPONENT, P_CONFIRM_FRAMES, P_LOADED_SHARE, P_FORCE_SHARE,
- P_RELEASE_RATE, P_ROTATIONAL, P_NOISE_MARGIN, P_FULL_SEARCH_EVERY, P_WARM_STEP, P_REACH, P_SCALE_GAIN,
- P_STALL_RISE, P_STALL_FRACTION, P_GROSS_FRAMES, P_SLIDE_FRAMES, P_SIZE) = range(33)
-# --- rows of the per-bump signals (5, 2, k) and of the ratio signals (4, 2, k, 2) -------------------------------
-FAST, FAST_PREVIOUS, SLOW, SLOW_PREVIOUS, RATIO_NOISE = range(5)
-SATURATED = 0.98                 # a command this close to the actuator's limit is pinned there, not regulated
-AT_MINIMUM = 1.05                # a command within this factor of the contact minimum sits there (not load-driven)
-MINIMUM_FRICTION = 0.05          # a slip measured at a lower ratio carried no load: it is not counted
-# the lift's test (``_lift_test``): a step up of the grip by this fraction, held for a watch window. Half: a held
-# load's nu then falls by log(1.5) = 0.41, and the verdict halfway (0.2) clears the noise margin at the contact
-# minimum (0.09-0.12 of nu for the traced bottle at 0.5-0.9 N, docs/design.md sec. 12)
-LIFT_STEP = 0.5
-# the step where a blind probe asks for the test (``_lift_step``): as large as its verdict needs over nu's noise, at
-# least this (a rise the verdict can see: twice force_drop, with room), at most LIFT_STEP - the grip there can be far
-# above the contact minimum (blind eclairs at 7 N: a step of half took 3 tuning eclairs past their crush force)
-LIFT_STEP_LEAST = 0.15
-# ... and a grip that grew by this fraction over the window while nu sat at the lift's level or above: sliding just
-# above the level, the load follows the grip and the demand asks only mu / level more (tuning draws: 0.2 and 0.3
-# alike, 0.5 one drop more)
-LIFT_GROWTH = 0.3
-# the lift test's states; ASKED: a probe that could not rely on its bump test did not start, and asked for the test
-LIFT_UNTRIED, LIFT_STEPPED, LIFT_DONE, LIFT_ASKED = 0.0, 1.0, 2.0, 3.0
 # the probe starts only where some fingertip has this many bumps its test can see slide (``_visible_bumps``): the bump
 # test confirms a slip at two bumps of one fingertip
 BLIND_BELOW = 2
-# what ``observe_frame`` saw: nothing, a single bump sliding, the grasp's carried load falling with its grip (gross
-# slip), the array's utilisation staying put while its grip fell (the array sliding as a whole)
-NO_SLIP, BUMP_SLIP, GROSS_SLIP, ARRAY_SLIP = range(4)
-SLIP_KINDS = {BUMP_SLIP: "bump", GROSS_SLIP: "gross", ARRAY_SLIP: "array"}
-
-
-@njit_cached(inline="always")
-def _first_min(a, b):
-    """min(a, b) that keeps a unless b is strictly smaller (a NaN b keeps a)."""
-    return b if b < a else a
-
-
-@njit_cached(inline="always")
-def _first_max(a, b):
-    """max(a, b) that keeps a unless b is strictly larger (a NaN b keeps a)."""
-    return b if b > a else a
 
 
 @njit_cached
@@ -98,114 +62,6 @@ def _target(parameters, scalars):
             and scalars[X_SLIDING] > 0.0):
         grip, use = _first_max(grip, scalars[X_COMMAND]), _first_max(use, scalars[X_FRICTION])
     return grip * use / (fraction * scalars[X_FRICTION])
-
-
-@njit_cached(inline="always")
-def _force_scale(scalars):
-    """The force loop's scale over the sensed force [-]: the command against the sensed force over a second (the
-    estimator's scale error; a lag of the grip behind its command averages out), within 0.5-2."""
-    scale = scalars[X_COMMAND_MEAN] / scalars[X_SENSED_MEAN] if scalars[X_SENSED_MEAN] > 0.0 else 1.0
-    return _first_min(_first_max(scale, 0.5), 2.0)
-
-
-@njit_cached(inline="always")
-def _ema(value, target, gain):
-    return target if value == 0.0 else value + gain * (target - value)
-
-
-@njit_cached
-def _load_follows_grip(parameters, now_use, now_grip, then_use, then_grip):
-    """Did the carried load follow the grip, from the utilisation nu and the grip now and at a reference: 1 if the
-    grip grew and nu did not fall with it (sliding: the load follows the grip and nu stays), 0 if nu fell with it
-    (held: the load stays and nu falls like 1 / P), judged halfway between with no margin towards 'held' (a sliding
-    array whose read nu moved with the grip was called held inside a margin); -1 if the grip did not grow by twice
-    force_drop (no verdict). The lift test's step and the test that an array still slides after a slip."""
-    if not (then_use > 0.0 and then_grip > 0.0 and now_use > 0.0 and now_grip > 0.0):
-        return -1
-    rise = math.log(now_grip / then_grip)
-    if rise < math.log(1.0 + 2.0 * parameters[P_FORCE_DROP]):
-        return -1
-    return 1 if math.log(now_use / then_use) > -0.5 * rise else 0
-
-
-@njit_cached(inline="always")
-def _lift_step(use, use_noise):
-    """The grip factor [-] of the lift test a blind probe asks for: a held load's nu falls by log(factor) = six of
-    nu's noise margins, so the verdict halfway clears three; within 1 + LIFT_STEP_LEAST ... 1 + LIFT_STEP."""
-    return _first_max(_first_min(math.exp(6.0 * use_noise / use), 1.0 + LIFT_STEP), 1.0 + LIFT_STEP_LEAST)
-
-
-@njit_cached
-def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noise, use_spread, full, frames,
-               at_minimum):
-    """The lift's test of a load that does not come on (once per lift): the grip's utilisation nu has sat below the
-    lift's level for a window, neither rising nor falling (a load that eases after the lift's acceleration lowers
-    nu while the grip lags: that is not it) - the grip is above what the load asks, which a held load
-    corrects within the loop's time (nu ~ 1 / P rises to the level as the grip sinks), but bumps that slide carry
-    mu of any grip and keep nu = mu. The grip steps up by LIFT_STEP and is held there for a window: held, the load
-    stays and nu falls like 1 / P; sliding, the load follows the grip and nu stays. Halfway between is the verdict,
-    and either must hold for confirm_frames frames in a row: sliding marks the array's slip
-    (signature[1, count]: mu_hat becomes nu), held lets the grip go back to its demand. Not while the probe runs (it
-    lowers the grip on purpose); a test still running when the lift ends is judged on into the hold. The same test
-    runs when nu has sat still at the level or above while the grip grew by LIFT_GROWTH over the window: bumps that
-    slide at a friction just above the level keep nu = mu and the demand creeps up with the grip. It starts only
-    where the lift's stall test cannot see: blind in its noise, or not judging at all because the grip is at the
-    contact minimum (``at_minimum``: the stall test judges only a load-driven grip). It also starts, whatever nu
-    does, where a probe that could not rely on its bump test did not start (LIFT_ASKED, ``_carry_step``): nu read
-    at the level is a held load's or one sliding at a friction read there, and only the step tells them apart - a
-    step sized to nu's noise there (``_lift_step``). A step the sensed grip does not follow by twice force_drop
-    gives no verdict, which is not 'held': after a whole window without one the grip steps up again by the same factor,
-    up to the actuator's limit, where the test ends (nothing is left to step)."""
-    level = parameters[P_LIFT_SAFETY] * scalars[X_FRICTION]
-    if scalars[X_LIFT_TEST] == LIFT_UNTRIED or scalars[X_LIFT_TEST] == LIFT_ASKED:
-        still = abs(use_now[0] - use_then[0]) <= use_noise
-        below = max(use_now[0], use_then[0]) + use_noise < level
-        creeping = (use_now[0] >= level - use_noise and use_spread <= use_noise
-                    and use_now[1] >= (1.0 + LIFT_GROWTH) * use_then[1])
-        # only where the lift's own stall test cannot see: its noise margin more than twice the rise it allows, or
-        # it does not judge at all - the grip at the contact minimum (a quiet array's margin is small there, and an
-        # object sliding at that grip was seen by neither test)
-        stall_cannot_see = use_noise > 2.0 * parameters[P_STALL_RISE] * use_now[0] or at_minimum
-        readable = use_now[1] > 0.0 and full and MINIMUM_FRICTION < use_now[0]
-        asked = scalars[X_LIFT_TEST] == LIFT_ASKED
-        unseen = (scalars[X_PHASE] == LIFT and scalars[X_PROBING] == 0.0 and MINIMUM_FRICTION < use_then[0]
-                  and stall_cannot_see and still and (below or creeping))
-        if readable and (asked or unseen):
-            scalars[X_LIFT_STEP] = _lift_step(use_now[0], use_noise) if asked else 1.0 + LIFT_STEP
-            scalars[X_LIFT_TEST], scalars[X_LIFT_FRAMES], scalars[X_LIFT_HELD] = LIFT_STEPPED, 0.0, 0.0
-            scalars[X_LIFT_UNJUDGED] = 0.0
-            # the step's reference grip: the command in the sensed scale, which the slowly filtered grip lags when
-            # the grip was growing (the lag would pass for part of the step's rise)
-            scalars[X_LIFT_USE] = use_now[0]
-            scalars[X_LIFT_GRIP] = _first_max(use_now[1], scalars[X_COMMAND] / _force_scale(scalars))
-            scalars[X_LIFT_HOLD] = _first_min(scalars[X_COMMAND] * scalars[X_LIFT_STEP], parameters[P_MAXIMUM_FORCE])
-            scalars[X_COMMAND] = scalars[X_LIFT_HOLD]
-    elif scalars[X_LIFT_TEST] == LIFT_STEPPED:
-        scalars[X_LIFT_FRAMES] += 1.0
-        if scalars[X_LIFT_FRAMES] >= frames:            # judged each frame until held, or the slip is confirmed
-            verdict = _load_follows_grip(parameters, use_now[0], use_now[1], scalars[X_LIFT_USE], scalars[X_LIFT_GRIP])
-            if verdict > 0:
-                signature[1, count] = True
-                scalars[X_LIFT_HELD] = scalars[X_LIFT_UNJUDGED] = 0.0
-            elif verdict == 0:
-                scalars[X_LIFT_UNJUDGED] = 0.0
-                scalars[X_LIFT_HELD] += 1.0
-                if scalars[X_LIFT_HELD] >= parameters[P_CONFIRM_FRAMES]:
-                    scalars[X_LIFT_TEST] = LIFT_DONE
-            else:
-                # no verdict: the sensed grip did not follow the step (at the contact minimum the estimated force
-                # resolves it poorly). Not seen is not held: after a whole window without one the grip steps up
-                # again - unless it is at the actuator's limit, where nothing is left to step and the test ends
-                scalars[X_LIFT_HELD] = 0.0
-                scalars[X_LIFT_UNJUDGED] += 1.0
-                if scalars[X_LIFT_UNJUDGED] >= frames:
-                    scalars[X_LIFT_UNJUDGED] = 0.0
-                    if scalars[X_LIFT_HOLD] >= SATURATED * parameters[P_MAXIMUM_FORCE]:
-                        scalars[X_LIFT_TEST] = LIFT_DONE
-                    else:
-                        scalars[X_LIFT_HOLD] = _first_min(scalars[X_LIFT_HOLD] * scalars[X_LIFT_STEP],
-                                                          parameters[P_MAXIMUM_FORCE])
-                        scalars[X_COMMAND] = _first_max(scalars[X_COMMAND], scalars[X_LIFT_HOLD])
 
 
 @njit_cached

@@ -55,7 +55,7 @@ minimum, where the utilisation's noise is several times the lift's stall thresho
 that test is blind (its noise margin more than twice ``STALL_RISE``) or does not judge at all (a grip at the contact
 minimum: on a quiet array the margin is narrow there, and an object sliding at that grip was watched by neither test), a
 utilisation that has sat below the level for a window, neither rising nor falling, is tested: the grip steps up by half
-(``_slip_law.LIFT_STEP``) and is held there for a window. Held, the load stays and nu falls like 1 / P; sliding, the
+(``_lift_test.LIFT_STEP``) and is held there for a window. Held, the load stays and nu falls like 1 / P; sliding, the
 load follows the grip and nu stays: halfway between is the verdict (no margin towards 'held', docs/design.md sec. 12).
 Sliding marks the array's slip (mu_hat = nu, the grip steps up as after any slip); held lets the grip back to its
 demand. A step the sensed grip does not follow (at the contact minimum the estimated force resolves it poorly) gives no
@@ -63,7 +63,7 @@ verdict, and no verdict is not 'held': after a whole window without one the grip
 limit, where the test ends; the probe waits while a test holds its step). The step is the safe direction. Just above the
 level the same blindness hides a slide the other way: bumps that slide at a friction a little above the level keep nu at
 mu, so the demand asks only mu / level more than the grip and the grip creeps up while the object slides (a bottle at mu
-0.32 slid 35 mm in the lift). A grip that grew by ``_slip_law.LIFT_GROWTH`` over the window while nu sat still at the
+0.32 slid 35 mm in the lift). A grip that grew by ``_lift_test.LIFT_GROWTH`` over the window while nu sat still at the
 level or above is tested the same way (its reference grip is the command in the sensed scale: the slowly filtered grip
 lags a growing one, and the lag would pass for a rise). After a slip seen in the lift, while the array still slides, the
 demand grows from the command at nu = mu_hat rather than from the slowly filtered grip at the nu it reads: that filter
@@ -95,13 +95,14 @@ import numpy as np
 from fem.validation import check_positive, check_range
 
 from ._slip_kernels import array_margin
-from ._slip_law import (PHASE_CODES, P_APPROACH_FORCE, P_CONFIRM_FRAMES, P_FAST_GAIN, P_FORCE_DROP, P_FORCE_SHARE,
+from ._slip_law import control_step, observe_frame
+from ._slip_state import (PHASE_CODES, P_APPROACH_FORCE, P_CONFIRM_FRAMES, P_FAST_GAIN, P_FORCE_DROP, P_FORCE_SHARE,
                         P_FULL_SEARCH_EVERY, P_GROSS_FRAMES, P_LIFT_SAFETY, P_LOADED_SHARE, P_LOOP_RATE,
                         P_MAXIMUM_FORCE, P_MAXIMUM_FRICTION, P_NOISE_MARGIN, P_PERIOD, P_PRIOR_FRICTION, P_PROBE_DELAY,
                         P_PROBE_RATE, P_RAMP_RATE, P_REACH, P_RELEASE_LOOP_RATE, P_RELEASE_RATE, P_ROTATIONAL, P_SAFETY,
                         P_SCALE_GAIN, P_SIZE, P_SLIDE_FRAMES, P_SLOW_GAIN, P_STALL_FRACTION, P_STALL_RISE,
                         P_STICK_EXPONENT, P_TOTAL_DROP, P_WARM_STEP, P_WATCH_TIME, SLIP_KINDS, X_COMMAND, X_FRICTION,
-                        X_MINIMUM, X_NEED, X_PROBING, X_SIZE, X_SLIP_SEEN, X_TIME, control_step, observe_frame)
+                        X_MINIMUM, X_NEED, X_PROBING, X_SIZE, X_SLIP_SEEN, X_TIME)
 from .filters import sample_period, tustin_gain
 from .references import GraspPhase
 
