@@ -154,8 +154,7 @@ def test_the_plant_and_the_bench_cover_the_drive_and_read_a_twist_alike_across_i
     # over the twisted bumps read and plant change alike to 4 %, half the drift the old ranges gave (fields to 18 N in
     # shear, bench to 16 N: +8.2 %, each bump +4.7 ... +9.9 %; measured now -1.8 %, each bump -4.8 ... +0.6 %)
     from contact.reduced.base_response import PACKAGED_BASE_RESPONSE, BaseResponse
-    from controller.closed_loop._bench import BENCH_NOISE, REST_RECORDS, estimator_bench
-    from controller.closed_loop._sensing import SensingChain
+    from controller.closed_loop._bench import BENCH_NOISE, tared_chain
     from controller.control import IncipientSlipParameters
     from controller.plant.bench_rig import BenchLoad, rig_states, run_bench
 
@@ -163,9 +162,7 @@ def test_the_plant_and_the_bench_cover_the_drive_and_read_a_twist_alike_across_i
     reach = (1.0 - 1e-6) * drive / len(response.centres)                 # per bump; the levels are stored to 1e-6
     assert response.normal_levels[-1] >= reach and response.shear_levels[-1] >= reach
     plant = FingertipPlant(PlantFactors(), noise=BENCH_NOISE, seed=3, plane=SensorPlane.FEM)
-    chain = SensingChain(estimator_bench(SensorPlane.FEM))
-    rest = run_bench(plant, [BenchLoad("rest") for _ in range(REST_RECORDS)], 20, seed=4)
-    chain.tare(np.stack([np.stack([r.readings.ravel()] * 2) for r in rest]))
+    chain = tared_chain(plant, SensorPlane.FEM, seed=4)
     loads = {}
     for force in (16.0, 28.0):
         load = BenchLoad("twist", force, torque=110.0)

@@ -28,8 +28,8 @@ from controller.plant import PlantModel, nominal_model
 from controller.plant.fingertip_plant import FingertipPlant, PlantFactors, SensorPlane
 from controller.sensing import SensorArray
 
-__all__ = ["EstimatorBench", "estimator_bench", "bench_array", "BENCH_SEED", "BENCH_NOISE", "BENCH_FRAMES",
-           "SMALL_SHIFTS", "REFERENCE_FORCES"]
+__all__ = ["EstimatorBench", "estimator_bench", "bench_array", "tared_chain", "BENCH_SEED", "BENCH_NOISE",
+           "BENCH_FRAMES", "SMALL_SHIFTS", "REFERENCE_FORCES"]
 
 BENCH_SEED = 8                  # the bench fingertip's own node draws and noise (no trial uses this build)
 BENCH_NOISE = 0.001             # N rms per node at small pressure: the array type the trials use
@@ -179,6 +179,18 @@ HELD_OUT_LOADS = (BenchLoad("press", 3.0), BenchLoad("press", 12.0), BenchLoad("
                   BenchLoad("shear", 3.0, (0.0, -1.5), 8.0), BenchLoad("shear", 24.0, (-6.0, 4.0), 40.0))
 
 
+def tared_chain(plant: FingertipPlant, plane: SensorPlane = SensorPlane.FEM, model: PlantModel | None = None,
+                array: SensorArray | None = None, seed: int = 0):
+    """The estimator fitted on the bench of the design (``estimator_bench``), tared on ``REST_RECORDS`` rest records of
+    ``plant`` (node noise from ``seed``): what reads a build on a bench once the estimator is calibrated."""
+    from ._sensing import SensingChain
+
+    chain = SensingChain(estimator_bench(plane, model, array))
+    rest = run_bench(plant, [BenchLoad("rest") for _ in range(REST_RECORDS)], BENCH_FRAMES, seed=seed)
+    chain.tare(np.stack([np.stack([r.readings.ravel()] * 2) for r in rest]))
+    return chain
+
+
 def belief_errors(plane: SensorPlane = SensorPlane.FEM, factors: PlantFactors = PlantFactors(), seed: int = 1,
                   model: PlantModel | None = None, array: SensorArray | None = None):
     """The estimator's per-bump errors on held-out bench states of a build with ``factors`` (default: a nominal
@@ -189,14 +201,10 @@ def belief_errors(plane: SensorPlane = SensorPlane.FEM, factors: PlantFactors = 
     is read here only to score the estimate (a study's question), never by the estimator."""
     from controller.plant.bench_rig import rig_states
 
-    from ._sensing import SensingChain
-
     known = SensorPlane(plane) is SensorPlane.MODEL
     plant = FingertipPlant(factors, bench_array(array), noise=0.0 if known else BENCH_NOISE, seed=seed, plane=plane,
                            model=model)
-    chain = SensingChain(estimator_bench(plane, model, array))
-    rest = run_bench(plant, [BenchLoad("rest") for _ in range(REST_RECORDS)], BENCH_FRAMES, seed=seed + 1)
-    chain.tare(np.stack([np.stack([r.readings.ravel()] * 2) for r in rest]))
+    chain = tared_chain(plant, plane, model, array, seed=seed + 1)
     records = run_bench(plant, HELD_OUT_LOADS, BENCH_FRAMES, seed=seed + 2)
     force_error, ratio_error, relative = 0.0, 0.0, 0.0
     for load, record in zip(HELD_OUT_LOADS, records):
