@@ -15,6 +15,7 @@ import csv
 import functools
 import hashlib
 import json
+import math
 import warnings
 from collections.abc import Callable
 from dataclasses import asdict
@@ -159,8 +160,23 @@ def add_plant_arguments(parser) -> None:
                              "estimator's own model read by ideal cells (the known world of earlier rounds)")
 
 
-def plant_options(plant_spread=None, plant=None, sensor_plane="fem") -> dict:
-    """Checked options of ``add_plant_arguments`` as keywords of ``trial_settings``."""
+def add_swing_argument(parser) -> None:
+    """The closed-loop studies' option on the incipient-slip law's swing margin (docs/design.md, sec. 12)."""
+    parser.add_argument("--swing-margin", type=float, default=0.0, metavar="M",
+                        help="while probing, the slip tests' margins are at least M times each signal's spread about "
+                             "its trend over the window (default 0: the sensor's noise alone; 3 was measured)")
+
+
+def check_swing_margin(swing_margin) -> float:
+    """``--swing-margin`` must be a number >= 0 [-]."""
+    if isinstance(swing_margin, bool) or not isinstance(swing_margin, (int, float)) or \
+            not 0.0 <= swing_margin < math.inf:
+        raise ValueError(f"--swing-margin={swing_margin!r} must be a number >= 0")
+    return float(swing_margin)
+
+
+def plant_options(plant_spread=None, plant=None, sensor_plane="fem", swing_margin=0.0) -> dict:
+    """Checked options of ``add_plant_arguments`` and ``add_swing_argument`` as keywords of ``trial_settings``."""
     from controller.closed_loop import PLANT_SPREAD
     from controller.plant import FACTOR_LIMIT, PlantFactors, SensorPlane
 
@@ -172,19 +188,22 @@ def plant_options(plant_spread=None, plant=None, sensor_plane="fem") -> dict:
         plane = SensorPlane(sensor_plane)
     except ValueError:
         raise ValueError(f"--sensor-plane={sensor_plane!r} is not one of {[p.value for p in SensorPlane]}") from None
-    return dict(plant_spread=float(spread), plant=factors, sensor_plane=plane)
+    return dict(plant_spread=float(spread), plant=factors, sensor_plane=plane,
+                swing_margin=check_swing_margin(swing_margin))
 
 
 def plant_description(options: dict) -> str:
-    """A figure title's words for ``plant_options``: sensor plane, plant factors and the friction range."""
+    """A figure title's words for ``plant_options``: sensor plane, plant factors, the friction range and the law's
+    swing margin where one is set."""
     from controller.closed_loop import FRICTION_RANGE
 
     fixed = options["plant"].nonzero() if options["plant"] is not None else None
     plant = ("nominal plant" if fixed == {} else
              "plant " + ", ".join(f"{name} {100 * value:+.0f} %" for name, value in fixed.items()) if fixed
              else f"plant factors +-{100 * options['plant_spread']:.0f} %")
+    swing = f", swing margin {options['swing_margin']:g}" if options.get("swing_margin") else ""
     return (f"{options['sensor_plane'].value} sensor plane, {plant}, "
-            f"mu {FRICTION_RANGE[0]:g}-{FRICTION_RANGE[1]:g}")
+            f"mu {FRICTION_RANGE[0]:g}-{FRICTION_RANGE[1]:g}{swing}")
 
 
 def trial_settings(rng, plant_spread: float, plant=None, sensor_plane="fem", **fixed):

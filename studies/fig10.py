@@ -22,8 +22,8 @@ from pathlib import Path
 import numpy as np
 
 from studies._output import save_figure, write_csv_atomic
-from studies._trials import (add_plant_arguments, check_trials, outcome_columns, plant_options, run_trial_table,
-                             trial_key, trial_settings)
+from studies._trials import (add_plant_arguments, add_swing_argument, check_trials, outcome_columns, plant_options,
+                             run_trial_table, trial_key, trial_settings)
 
 NAME = "fig10"
 FRICTION = 0.6                  # (a) bottle
@@ -38,6 +38,7 @@ def add_arguments(parser) -> None:
                                                                   "quick 2)")
     parser.add_argument("--processes", type=int, default=None, help="worker processes (default: every CPU)")
     add_plant_arguments(parser)
+    add_swing_argument(parser)
 
 
 LABELS = {"held": "held", "turned_out": "turned out", "dropped": "dropped", "crushed": "crushed"}
@@ -58,23 +59,26 @@ def _row(result, info) -> dict:
 
 
 def run(out_dir, quick: bool = False, trials: int | None = None, processes: int | None = None,
-        plant_spread: float | None = None, plant: str | None = None, sensor_plane: str = "fem") -> dict:
+        plant_spread: float | None = None, plant: str | None = None, sensor_plane: str = "fem",
+        swing_margin: float = 0.0) -> dict:
     """(a) one bottle trial; (b) randomised trials with and without rotational detection; CSVs and figure."""
     from controller.closed_loop import HELD_OUT_SEED, TABLE_I_OBJECTS, TrialSettings, run_trials
 
     out_dir = Path(out_dir)
     trials = (2 if quick else TRIALS) if trials is None else trials
     check_trials(trials)
-    options = plant_options(plant_spread, plant, sensor_plane)
+    options = plant_options(plant_spread, plant, sensor_plane, swing_margin)
     hold = 2.0 if quick else 4.0
     plane = options["sensor_plane"]
     series_settings = {"bottle": ("bottle_horizontal", TrialSettings(friction_coefficient=FRICTION, hold_time=hold,
-                                                                     seed=3, sensor_plane=plane)),
+                                                                     seed=3, sensor_plane=plane,
+                                                                     swing_margin=options["swing_margin"])),
                        "eclair_with_rotation": ("eclair", TrialSettings(friction_coefficient=ECLAIR_FRICTION,
-                                                                        hold_time=hold, seed=3, sensor_plane=plane)),
+                                                                        hold_time=hold, seed=3, sensor_plane=plane,
+                                                                        swing_margin=options["swing_margin"])),
                        "eclair_without_rotation": ("eclair", TrialSettings(
                            friction_coefficient=ECLAIR_FRICTION, hold_time=hold, seed=3,
-                           rotational_slip_detection=False, sensor_plane=plane))}
+                           rotational_slip_detection=False, sensor_plane=plane, swing_margin=options["swing_margin"]))}
     finished = {}                                    # trials finish in any order; the outputs keep the cases' order
     for index, result in run_trials([(TABLE_I_OBJECTS[name], s) for name, s in series_settings.values()],
                                     processes):

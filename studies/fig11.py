@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 
 from studies._output import save_figure
-from studies._trials import (add_plant_arguments, check_trials, outcome_columns, plant_options, run_trial_table,
-                             trial_key, trial_settings)
+from studies._trials import (add_plant_arguments, add_swing_argument, check_trials, outcome_columns, plant_options,
+                             run_trial_table, trial_key, trial_settings)
 
 NAME = "fig11"
 SIZE = (0.200, 0.070, 0.070)          # m, the horizontal bottle
@@ -36,6 +36,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--trials", type=int, default=None, help=f"trials per case (default {TRIALS}, quick 1)")
     parser.add_argument("--processes", type=int, default=None, help="worker processes (default: every CPU)")
     add_plant_arguments(parser)
+    add_swing_argument(parser)
 
 
 def cases(quick: bool) -> list[tuple[float, float]]:
@@ -70,14 +71,15 @@ def _row(value, info) -> dict:
 
 
 def run(out_dir, quick: bool = False, trials: int | None = None, processes: int | None = None,
-        plant_spread: float | None = None, plant: str | None = None, sensor_plane: str = "fem") -> dict:
+        plant_spread: float | None = None, plant: str | None = None, sensor_plane: str = "fem",
+        swing_margin: float = 0.0) -> dict:
     """Controller trial and tau_min per trial; CSV and figure."""
     from controller.closed_loop import HELD_OUT_SEED, GraspObject
 
     out_dir = Path(out_dir)
     trials = (1 if quick else TRIALS) if trials is None else trials
     check_trials(trials)
-    options = plant_options(plant_spread, plant, sensor_plane)
+    options = plant_options(plant_spread, plant, sensor_plane, swing_margin)
     rng = np.random.default_rng(HELD_OUT_SEED + 11)
     jobs = []
     for mass, lever in cases(quick):

@@ -21,7 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from studies._output import save_figure, write_csv_atomic
-from studies._trials import check_trials, run_trial_table, trial_columns, trial_key, trial_settings
+from studies._trials import (add_swing_argument, check_swing_margin, check_trials, run_trial_table, trial_columns,
+                             trial_key, trial_settings)
 
 NAME = "robustness"
 LEVELS = (-0.2, -0.1, 0.1, 0.2)
@@ -38,6 +39,7 @@ def add_arguments(parser) -> None:
                         help=f"trials per object and cell (default {TRIALS}, --full {FULL_TRIALS}, quick 1)")
     parser.add_argument("--full", action="store_true", help="levels 0, +-5 ... +-20 %% and 30 trials per cell")
     parser.add_argument("--processes", type=int, default=None, help="worker processes (default: every CPU)")
+    add_swing_argument(parser)
 
 
 def cells(full: bool, quick: bool) -> list[dict]:
@@ -65,20 +67,21 @@ def _row(result, info) -> dict:
 
 
 def run(out_dir, quick: bool = False, trials: int | None = None, full: bool = False,
-        processes: int | None = None) -> dict:
+        processes: int | None = None, swing_margin: float = 0.0) -> dict:
     """Every cell's trials (resumable), the per-cell summary and the figure."""
     from controller.closed_loop import HELD_OUT_SEED, TABLE_I_OBJECTS
 
     out_dir = Path(out_dir)
     trials = (1 if quick else FULL_TRIALS if full else TRIALS) if trials is None else trials
     check_trials(trials)
+    margin = check_swing_margin(swing_margin)
     jobs = []
     for index, cell in enumerate(cells(full, quick)):
         # one stream per cell: adding a cell or trials to one leaves the others' draws as they were
         rng = np.random.default_rng([HELD_OUT_SEED, 100 + index])
         for name, obj in TABLE_I_OBJECTS.items():
             for trial in range(trials):
-                settings = trial_settings(rng, cell["spread"], cell["plant"], cell["plane"])
+                settings = trial_settings(rng, cell["spread"], cell["plant"], cell["plane"], swing_margin=margin)
                 info = dict(cell=cell["cell"], factor=cell["factor"], level=cell["level"], object=name, trial=trial,
                             crush_force=obj.crush_force)
                 jobs.append((trial_key(obj, settings, "robustness"), obj, settings, info))

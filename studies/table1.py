@@ -27,8 +27,8 @@ from pathlib import Path
 import numpy as np
 
 from studies._output import save_figure, write_json_atomic
-from studies._trials import (add_plant_arguments, check_trials, outcome_columns, plant_description, plant_options,
-                             run_trial_table, trial_key, trial_settings)
+from studies._trials import (add_plant_arguments, add_swing_argument, check_trials, outcome_columns, plant_description,
+                             plant_options, run_trial_table, trial_key, trial_settings)
 
 NAME = "table1"
 PAPER_SUCCESS = {"bottle_upright": "10/10", "bottle_horizontal": "10/10", "eclair": "10/10"}
@@ -44,6 +44,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--objects", type=lambda text: [name for name in text.split(",") if name], default=None,
                         metavar="NAME,NAME", help="only these objects (bottle_upright, bottle_horizontal, eclair)")
     add_plant_arguments(parser)
+    add_swing_argument(parser)
 
 
 def _row(result, info) -> dict:
@@ -60,7 +61,8 @@ def _row(result, info) -> dict:
 
 def run(out_dir, quick: bool = False, trials: int | None = None, seed: int | None = None,
         processes: int | None = None, objects: list[str] | None = None, plant_spread: float | None = None,
-        plant: str | None = None, sensor_plane: str = "fem") -> dict:
+        plant: str | None = None, sensor_plane: str = "fem",
+        swing_margin: float = 0.0) -> dict:
     """Run the trials of every Table I object (or of ``objects``); CSV, summary JSON and figure."""
     from controller.closed_loop import CREEP_WINDOW, HELD_OUT_SEED, TABLE_I_OBJECTS
 
@@ -70,7 +72,7 @@ def run(out_dir, quick: bool = False, trials: int | None = None, seed: int | Non
     unknown = sorted(set(objects or ()) - set(TABLE_I_OBJECTS))
     if unknown or objects == []:
         raise ValueError(f"objects={objects!r}: unknown {unknown}; allowed: {list(TABLE_I_OBJECTS)}")
-    options = plant_options(plant_spread, plant, sensor_plane)
+    options = plant_options(plant_spread, plant, sensor_plane, swing_margin)
     rng = np.random.default_rng(HELD_OUT_SEED if seed is None else seed)
     jobs = []
     for name, obj in TABLE_I_OBJECTS.items():

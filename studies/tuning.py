@@ -1,18 +1,18 @@
 """The tuning draws (seed 101): the trial sets the incipient-slip law's changes are judged on.
 
 Every set draws from a generator of its own, ``default_rng(TUNING_SEED + offset)`` (``TuningSet.offset``), so a change
-of one set leaves the others' draws as they were; none is the held-out seed's. The last four sets reuse offsets 0-3
-with other objects and frictions (they were drawn that way when docs/design.md sec. 12 measured them; a new set takes an
+of one set leaves the others' draws as they were; none is the held-out seed's. The last four sets reuse offsets 0-3 with
+other objects and frictions (they were drawn that way when docs/design.md sec. 12 measured them; a new set takes an
 offset from 11 on). Each trial is a randomised trial of the protocol (``random_settings``: friction uniform in the set's
 range, grasp jitter, misalignment, sensor noise, every plant factor within +-10 %); Table I's objects run the whole
 sequence, the Fig. 11 boxes lift and hold 4 s. `python -m studies tuning` gives the numbers sec. 12 judges the law and
 its rejected changes by, for the law in this checkout. Not part of ``studies all``: it is the tuning's measure, not a
 paper figure. Per set: held / turned out / dropped / crushed, the held rate's 95 % Wilson interval, the trials whose
-friction was never measured (no slip seen), the settled grip over the trial's own slip limit, the largest turn of a
-held object, the friction estimate's error. ``--sensor-noise-scale S`` runs the same draws with every array's node noise
+friction was never measured (no slip seen), the settled grip over the trial's own slip limit, the largest turn of a held
+object, the friction estimate's error. ``--sensor-noise-scale S`` runs the same draws with every array's node noise
 times S (the law reads its noise from a rest calibration, so it follows): where the sensor, not the law, sets a limit
-(docs/design.md sec. 12). Outputs: tuning.csv (one row per trial, resumable), tuning_summary.csv (one row per set),
-tuning.png/pdf.
+(docs/design.md sec. 12); ``--swing-margin M`` runs them with the law's swing margin (an option, off by default).
+Outputs: tuning.csv (one row per trial, resumable), tuning_summary.csv (one row per set), tuning.png/pdf.
 """
 
 from __future__ import annotations
@@ -23,7 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from studies._output import save_figure, write_csv_atomic
-from studies._trials import check_trials, run_trial_table, trial_columns, trial_key
+from studies._trials import (add_swing_argument, check_swing_margin, check_trials, run_trial_table, trial_columns,
+                             trial_key)
 
 NAME = "tuning"
 
@@ -78,6 +79,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--trials", type=int, default=None,
                         help="the first N trials of each set, at most the set's own (default: all; quick 2)")
     parser.add_argument("--processes", type=int, default=None, help="worker processes (default: every CPU)")
+    add_swing_argument(parser)
     parser.add_argument("--sensor-noise-scale", type=float, default=1.0, metavar="S",
                         help=f"every trial's node noise times S, the draws unchanged (default 1: the protocol's "
                              f"0.5-2 mN; allowed {NOISE_SCALE_RANGE[0]:g}-{NOISE_SCALE_RANGE[1]:g}); give it an --out "
@@ -96,9 +98,10 @@ def grasp_object(entry: TuningSet):
 
 
 def jobs(sets: list[str] | None = None, trials: int | None = None, quick: bool = False,
-         sensor_noise_scale: float = 1.0) -> list[tuple]:
+         sensor_noise_scale: float = 1.0, swing_margin: float = 0.0) -> list[tuple]:
     """The chosen sets' trials as ``run_trial_table`` jobs (key, object, settings, info), in set order; each trial's
-    node noise [N] times ``sensor_noise_scale`` after its draw (its key follows the settings)."""
+    node noise [N] times ``sensor_noise_scale`` after its draw, and the law's ``swing_margin`` (the key follows the
+    settings)."""
     from controller.closed_loop import TUNING_SEED, random_settings
 
     known = [entry.name for entry in SETS]
@@ -108,6 +111,7 @@ def jobs(sets: list[str] | None = None, trials: int | None = None, quick: bool =
     if trials is not None:
         check_trials(trials)
     scale = check_noise_scale(sensor_noise_scale)
+    margin = check_swing_margin(swing_margin)
     out = []
     for entry in SETS:
         if sets is not None and entry.name not in sets:
@@ -117,7 +121,7 @@ def jobs(sets: list[str] | None = None, trials: int | None = None, quick: bool =
         rng = np.random.default_rng(TUNING_SEED + entry.offset)
         for trial in range(min(entry.trials, trials if trials is not None else (2 if quick else entry.trials))):
             settings = random_settings(rng, friction_range=entry.friction, **fixed)
-            settings = replace(settings, sensor_noise=settings.sensor_noise * scale)
+            settings = replace(settings, sensor_noise=settings.sensor_noise * scale, swing_margin=margin)
             info = {"set": entry.name, "trial": trial, "crush_force": obj.crush_force}
             # the set in the key: a renamed set runs again rather than reading its rows back under the old name
             out.append((trial_key(obj, settings, f"tuning:{entry.name}"), obj, settings, info))
@@ -129,10 +133,10 @@ def _row(result, info) -> dict:
 
 
 def run(out_dir, quick: bool = False, sets: list[str] | None = None, trials: int | None = None,
-        processes: int | None = None, sensor_noise_scale: float = 1.0) -> dict:
+        processes: int | None = None, sensor_noise_scale: float = 1.0, swing_margin: float = 0.0) -> dict:
     """Every chosen set's trials (resumable), the per-set summary and the figure."""
     out_dir = Path(out_dir)
-    chosen = jobs(sets, trials, quick, sensor_noise_scale)
+    chosen = jobs(sets, trials, quick, sensor_noise_scale, swing_margin)
     rows = run_trial_table(out_dir / f"{NAME}.csv", chosen, _row, processes, label=NAME)
     summary = summarise(rows, sensor_noise_scale)
     write_csv_atomic(out_dir / f"{NAME}_summary.csv", summary)
@@ -146,7 +150,7 @@ def run(out_dir, quick: bool = False, sets: list[str] | None = None, trials: int
               f"{entry['rotation_max_mrad']:.0f} mrad; {_friction_error(entry)}")
     held = sum(entry["held"] for entry in summary)
     print(f"{NAME}: held {held} of {len(rows)} in all")
-    save_figure(_plot(summary, sensor_noise_scale), out_dir, NAME)
+    save_figure(_plot(summary, sensor_noise_scale, swing_margin), out_dir, NAME)
     return {"max_error": 1.0 - held / len(rows), "error_meaning": "share of the tuning trials not held",
             "held": held, "trials": len(rows), "sets": summary}
 
@@ -191,7 +195,7 @@ def summarise(rows, sensor_noise_scale: float = 1.0) -> list[dict]:
     return out
 
 
-def _plot(summary, sensor_noise_scale: float = 1.0):
+def _plot(summary, sensor_noise_scale: float = 1.0, swing_margin: float = 0.0):
     """Outcome shares per set, stacked horizontal bars, each set's friction range and held count on its label."""
     import matplotlib.pyplot as plt
 
@@ -209,6 +213,7 @@ def _plot(summary, sensor_noise_scale: float = 1.0):
     ax.set_xlim(0.0, 1.0)
     ax.set_xlabel("share of the set's trials")
     noise = "" if sensor_noise_scale == 1.0 else f", node noise x{sensor_noise_scale:g}"
+    noise += f", swing margin {swing_margin:g}" if swing_margin else ""
     ax.set_title(f"tuning draws{noise}: {sum(e['held'] for e in summary)} of {sum(e['trials'] for e in summary)} held")
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), fontsize=8, ncol=4, frameon=False)
     return fig

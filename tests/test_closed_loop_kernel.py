@@ -230,6 +230,7 @@ def test_implicit_coupling_holds_a_light_object_still_where_the_explicit_one_fai
     (dict(hold_time=math.nan), "hold_time=nan outside"),
     (dict(constant_force=-2.0), "constant_force=-2.0 outside"),
     (dict(place="no"), "place='no' must be True or False"),
+    (dict(swing_margin=-3.0), "swing_margin=-3.0 outside"),
 ])
 def test_bad_trial_settings_name_the_setting(changes, match):
     with pytest.raises(ValueError, match=match):

@@ -212,6 +212,24 @@ def test_tuning_refuses_a_bad_noise_scale(scale):
         tuning.jobs(["eclair"], trials=1, sensor_noise_scale=scale)
 
 
+def test_the_swing_margin_option_reaches_the_trials_and_bad_ones_are_refused_by_name():
+    """``--swing-margin``: the tuning draws' settings carry it (the draws themselves the same, under keys of their
+    own), the held-out tables' options too; a negative, infinite or non-numeric margin is refused by its flag's name."""
+    from studies import tuning
+    from studies._trials import plant_options
+
+    plain, wide = tuning.jobs(["eclair"], trials=2), tuning.jobs(["eclair"], trials=2, swing_margin=3.0)
+    for (key, _, settings, _), (wide_key, _, wide_settings, _) in zip(plain, wide):
+        assert settings.swing_margin == 0.0 and wide_settings == replace(settings, swing_margin=3.0)
+        assert wide_key != key
+    assert plant_options(swing_margin=3)["swing_margin"] == 3.0
+    for bad in (-1.0, math.inf, math.nan, True, "3"):
+        with pytest.raises(ValueError, match=r"--swing-margin=.* must be a number >= 0"):
+            tuning.jobs(["eclair"], trials=1, swing_margin=bad)
+        with pytest.raises(ValueError, match=r"--swing-margin=.* must be a number >= 0"):
+            plant_options(swing_margin=bad)
+
+
 def test_tuning_runs_a_chosen_set_resumes_and_refuses_unknown_ones(tmp_path, monkeypatch):
     import numpy as np
 

@@ -133,7 +133,8 @@ class TrialSettings:
     nominal build and never sees them) and what makes the sensor plane (``sensor_plane``: the FEM's fields read by
     capacitive nodes, or the estimator's own model read by ideal cells - the known world of earlier rounds) and where
     the 8 kHz force loop reads the grip from (``force_feedback``: the actuator's reaction-force observer, as a
-    gripper without a force sensor; or a force sensor, as earlier rounds)."""
+    gripper without a force sensor; or a force sensor, as earlier rounds), and the incipient-slip law's
+    ``swing_margin`` (``IncipientSlipParameters``; 0: its tests' margins are the sensor's noise alone)."""
 
     friction_coefficient: float = 0.8
     grasp_offset: tuple[float, float] = (0.0, 0.0)
@@ -152,6 +153,7 @@ class TrialSettings:
     plant: PlantFactors = PlantFactors()
     sensor_plane: SensorPlane = SensorPlane.FEM
     force_feedback: ForceFeedback = ForceFeedback.OBSERVER
+    swing_margin: float = 0.0
 
     def __post_init__(self):
         try:
@@ -181,6 +183,7 @@ class TrialSettings:
         if self.constant_force is not None:
             check_positive("constant_force", self.constant_force, "N")
         check_range("hold_time", self.hold_time, 0.0, 600.0, "s")
+        check_range("swing_margin", self.swing_margin, 0.0, math.inf, high_open=True)
         check_integer("seed", self.seed, 0, 2**63 - 1)               # a generator seed: 1.5 or True is no seed
         for name in ("rotational_slip_detection", "place", "implicit_coupling"):
             if not isinstance(getattr(self, name), bool):

@@ -83,7 +83,8 @@ class GraspWorld:
         ``PlantModel`` and array). The truth side: the estimator is calibrated on the bench of the plant's design
         (``_bench``: a nominal build of the same model and array type) and tared at rest, and never reads the plant.
     controller_parameters : IncipientSlipParameters or GraspForceParameters, optional -- the controller's
-        parameters, of the kind ``settings.controller`` names (rotational detection is taken from ``settings``).
+        parameters, of the kind ``settings.controller`` names (rotational detection and the incipient-slip law's
+        swing margin are taken from ``settings``).
     """
 
     def __init__(self, obj: GraspObject, settings: TrialSettings | None = None, plant: FingertipPlant | None = None,
@@ -355,7 +356,8 @@ def _controller(settings: TrialSettings, parameters, sensing: SensingChain):
                          f"got {type(base).__name__}")
     frame_rate = sensing.array.sample_rate_hz
     return IncipientSlipController(
-        replace(base, rotational_slip_detection=settings.rotational_slip_detection, frame_rate_hz=frame_rate),
+        replace(base, rotational_slip_detection=settings.rotational_slip_detection, frame_rate_hz=frame_rate,
+                swing_margin=settings.swing_margin),
         sensing.layout.centre_array)                     # the estimator's layout of the design
 
 

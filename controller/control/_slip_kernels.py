@@ -13,7 +13,8 @@ import math
 import numpy as np
 from fem.compiled import njit_cached
 
-__all__ = ["array_margin", "fingertip_need", "slip_signature", "low_pass_frame", "carried_wrench"]
+__all__ = ["array_margin", "fingertip_need", "slip_signature", "low_pass_frame", "carried_wrench", "trend_spread",
+           "dominant_component"]
 
 # a held grasp's carried load still moves with its grip: the estimator's own error (its kernel and arm are not the
 # plant's) and the bumps' own elasticity, whose tangential stiffness follows the grip, make it fall by about 0.25-0.6
@@ -148,23 +149,22 @@ def slip_signature(force, ratio, fast_force, fast_ratio, contact, centres, force
     fingertip's |sum q| / sum P), the largest ratio of the bearing bumps, |rho_i| (2, k) and, per fingertip (2,), the
     largest |rho_i| in contact and the mean bump force [N] (``watched``'s references).
 
-    Bumps (slowly filtered ``force``, ``ratio``) are judged only when ``judged``, against the frame
-    ``watch_frames`` ago (force_then, ratios_then): a bump whose force fell by ``force_drop`` while its ratio rose
-    less than a stuck bump's (P^-``stick_exponent``, with a margin ``noise`` (2, k) [-] over its estimate's noise)
-    slides. Gross slip (slow signals, below the object's swing in the fingers; when ``watch_total``): the carried
-    load's dominant component - the total force F or the moment T / ``reach`` - and the normal force fell below
-    ``reference`` (the largest F, T / reach and sum P [N] of the last frames; negative: none yet) by ``total_drop``
-    and by the noise margin ``wrench_noise`` [N]: held, the grasp carries a constant load whatever its grip;
-    sliding, its friction falls as fast as the grip (a short window: the estimator's own error of the load drifts
-    with the grip far slower). ``carried`` (3,) receives this frame's (F, T / reach, sum P). The
-    array as a whole (slowly filtered), in [1, k]: its utilisation nu and normal force ``use_now`` (2,) against
-    ``use_then`` (2,) of the frame ``watch_frames`` ago. ``use_mode`` 1 (a probe): the same test as a bump's with
-    the margin ``use_noise`` [-] - a grasp that slides as a whole keeps nu = mu while its grip falls, held its nu
-    rises like 1 / P. ``use_mode`` 2 (a lift): the grip holds nu at ``use_level``; nu stalled (moved less than
-    ``stall_rise`` over the window) below ``stall_fraction`` of it while the grip sank, or anywhere while the grip
-    rose by ``force_drop``, is a load that follows the grip: the bumps slide at a friction the prior does not cover
-    (held, nu rises to the level as the weight comes off the table - the grip grows with it - and then stays
-    there at a grip that no longer grows)."""
+    Bumps (slowly filtered ``force``, ``ratio``) are judged only when ``judged``, against the frame ``watch_frames`` ago
+    (force_then, ratios_then): a bump whose force fell by ``force_drop`` while its ratio rose less than a stuck bump's
+    (P^-``stick_exponent``, with a margin ``noise`` (2, k) [-]: its estimate's noise, or its swing) slides. Gross slip
+    (slow signals, below the object's swing in the fingers; when ``watch_total``): the carried load's dominant component
+    - the total force F or the moment T / ``reach`` - and the normal force fell below ``reference`` (the largest F, T /
+    reach and sum P [N] of the last frames; negative: none yet) by ``total_drop`` and by the margin ``wrench_noise`` [N]
+    (noise, or swing): held, the grasp carries a constant load whatever its grip; sliding, its friction falls as fast as
+    the grip (a short window: the estimator's own error of the load drifts with the grip far slower). ``carried`` (3,)
+    receives this frame's (F, T / reach, sum P). The array as a whole (slowly filtered), in [1, k]: its utilisation nu
+    and normal force ``use_now`` (2,) against ``use_then`` (2,) of the frame ``watch_frames`` ago. ``use_mode`` 1 (a
+    probe): the same test as a bump's with the margin ``use_noise`` [-] (noise, or swing) - a grasp that slides as a
+    whole keeps nu = mu while its grip falls, held its nu rises like 1 / P. ``use_mode`` 2 (a lift): the grip holds nu
+    at ``use_level``; nu stalled (moved less than ``stall_rise`` over the window) below ``stall_fraction`` of it while
+    the grip sank, or anywhere while the grip rose by ``force_drop``, is a load that follows the grip: the bumps slide
+    at a friction the prior does not cover (held, nu rises to the level as the weight comes off the table - the grip
+    grows with it - and then stays there at a grip that no longer grows)."""
     count = force.shape[1]
     signature = np.zeros((2, count + 1), dtype=np.bool_)
     ratios = np.empty((2, count))
@@ -194,7 +194,7 @@ def slip_signature(force, ratio, fast_force, fast_ratio, contact, centres, force
     # moment, the bumps' forces also carry an internal, grip-dependent part; the moment is the object's own)
     carried[0], carried[1], carried[2] = load, moment / reach, normal
     if watch_total and reference[2] > 0.0:
-        component = 1 if reference[1] > reference[0] else 0
+        component = dominant_component(reference)
         now, then = carried[component], reference[component]
         load_fall, grip_fall = 1.0 - now / then if then > 0.0 else 0.0, 1.0 - normal / reference[2]
         # fell by the threshold, and at least GROSS_SHARE as fast as the grip
@@ -222,6 +222,36 @@ def slip_signature(force, ratio, fast_force, fast_ratio, contact, centres, force
                 signature[f, i] = fallen <= 1.0 - force_drop and \
                     ratios[f, i] + noise[f, i] <= ratios_then[f, i] * fallen ** (-stick_exponent)
     return signature, total_ratio, bearing, ratios, largest, mean_force
+
+
+@njit_cached(inline="always")
+def dominant_component(reference):
+    """Which of the carried wrench's references (F, T / reach, ...) the gross test watches: the larger of the two."""
+    return 1 if reference[1] > reference[0] else 0
+
+
+@njit_cached
+def trend_spread(values, written, skip=0):
+    """The rms spread of a ring buffer's values about their least-squares line (same unit): what moves a signal over
+    the window besides its trend (noise, and the object's swing in the fingers). Over the min(written, len) last
+    values less the newest ``skip``; 0 for fewer than three."""
+    size = values.shape[0]
+    count = min(written, size) - skip
+    if count < 3:
+        return 0.0
+    start = written - skip - count
+    middle = 0.5 * (count - 1)
+    mean = slope = spread = squares = 0.0
+    for j in range(count):
+        mean += values[(start + j) % size]
+    mean /= count
+    for j in range(count):
+        slope += (j - middle) * (values[(start + j) % size] - mean)
+        squares += (j - middle) ** 2
+    slope /= squares
+    for j in range(count):
+        spread += (values[(start + j) % size] - mean - slope * (j - middle)) ** 2
+    return math.sqrt(spread / count)
 
 
 @njit_cached(inline="always")

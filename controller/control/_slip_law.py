@@ -16,20 +16,21 @@ import numpy as np
 from fem.compiled import njit_cached
 
 from ._lift_test import (LIFT_UNTRIED, LIFT_STEPPED, LIFT_DONE, LIFT_ASKED, _load_follows_grip, _lift_test)
-from ._slip_kernels import fingertip_need, low_pass_frame, slip_signature, watched
+from ._slip_kernels import (dominant_component, fingertip_need, low_pass_frame, slip_signature, trend_spread,
+                            watched)
 from ._slip_state import (APPROACH, ARRAY_SLIP, AT_MINIMUM, BUMP_SLIP, FAST, FAST_PREVIOUS, GROSS_SLIP, HOLD, LIFT,
                           MINIMUM_FRICTION, NO_SLIP, PLACE, P_APPROACH_FORCE, P_CONFIRM_FRAMES, P_FAST_GAIN,
                           P_FORCE_DROP, P_FORCE_SHARE, P_FULL_SEARCH_EVERY, P_GROSS_FRAMES, P_LIFT_SAFETY,
                           P_LOADED_SHARE, P_LOOP_RATE, P_MAXIMUM_FORCE, P_MAXIMUM_FRICTION, P_NOISE_MARGIN, P_PERIOD,
                           P_PROBE_DELAY, P_PROBE_RATE, P_RAMP_RATE, P_REACH, P_RELEASE_LOOP_RATE, P_RELEASE_RATE,
                           P_ROTATIONAL, P_SAFETY, P_SCALE_GAIN, P_SLIDE_FRAMES, P_SLOW_GAIN, P_STALL_FRACTION,
-                          P_STALL_RISE, P_STICK_EXPONENT, P_TOTAL_DROP, P_WARM_STEP, P_WATCH_TIME, RATIO_NOISE, RELEASE,
-                          SATURATED, SLOW, SLOW_PREVIOUS, X_CARRY_SLIP, X_CARRY_TIME, X_COMMAND, X_COMMAND_MEAN,
-                          X_CONTACTS, X_FRAMES, X_FRICTION, X_GRIP, X_HISTORY, X_LIFT_HOLD, X_LIFT_TEST, X_MINIMUM,
-                          X_NEED, X_PHASE, X_PLACE_FORCE, X_PROBED, X_PROBE_BEGUN, X_PROBING, X_RELEASE_FORCE,
-                          X_RELEASE_NEED, X_RELEASING, X_SENSED, X_SENSED_MEAN, X_SENSED_SLOW, X_SLIDING, X_SLID_GRIP,
-                          X_SLID_HELD, X_SLID_USE, X_SLIP_SEEN, X_STARTED, X_TIME, X_USE_SLOW, X_VISIBLE, X_WATCHING,
-                          _ema, _first_max, _first_min, _force_scale)
+                          P_STALL_RISE, P_STICK_EXPONENT, P_SWING_MARGIN, P_TOTAL_DROP, P_WARM_STEP, P_WATCH_TIME,
+                          RATIO_NOISE, RELEASE, SATURATED, SLOW, SLOW_PREVIOUS, X_CARRY_SLIP, X_CARRY_TIME, X_COMMAND,
+                          X_COMMAND_MEAN, X_CONTACTS, X_FRAMES, X_FRICTION, X_GRIP, X_HISTORY, X_LIFT_HOLD, X_LIFT_TEST,
+                          X_MINIMUM, X_NEED, X_PHASE, X_PLACE_FORCE, X_PROBED, X_PROBE_BEGUN, X_PROBING,
+                          X_RELEASE_FORCE, X_RELEASE_NEED, X_RELEASING, X_SENSED, X_SENSED_MEAN, X_SENSED_SLOW,
+                          X_SLIDING, X_SLID_GRIP, X_SLID_HELD, X_SLID_USE, X_SLIP_SEEN, X_STARTED, X_TIME, X_USE_SLOW,
+                          X_VISIBLE, X_WATCHING, _ema, _first_max, _first_min, _force_scale)
 
 __all__ = ["observe_frame", "control_step"]
 
@@ -159,6 +160,28 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
             for column in range(3):
                 reference[column] = max(reference[column], history_use[row, 2 + column])
     carried = np.zeros(3)
+    # the tests' margins (a bump's ratio, the carried load, the array's nu): the noise's, or, with a swing margin and
+    # once the window lies in the probe, that many times the signal's rms spread about its trend over the window
+    # where that is larger (a held object rocks in the compliant fingers and its loads swing with it; docs/design.md
+    # sec. 12). A bump's spread leaves out the newest frames of its history, the confirmation's and one: the onset of
+    # its slide bends them, and a margin that grew with it saw the slide later, the array by then sliding as a whole
+    # and read low. The carried load's and nu's keep them (left out of the gross test's too, the swing's fall passed it)
+    # the utilisation's noise: the per-bump noise pooled, through the slow filter (variance times its gain b) and the
+    # window's difference (twice that): sqrt(2 b) of the raw margin
+    use_noise = math.sqrt(2.0 * parameters[P_SLOW_GAIN]) * wrench_noise / max(sensed, 1e-9)
+    watch_noise, gross_noise, array_noise = noise, wrench_noise, use_noise
+    swing_margin = parameters[P_SWING_MARGIN]
+    if probed and swing_margin > 0.0:
+        watch_noise = noise.copy()
+        skip = int(parameters[P_CONFIRM_FRAMES]) + 1
+        for f in range(2):
+            for i in range(count):
+                if contact[f, i]:
+                    spread = trend_spread(history_ratios[:, f, i], written, skip)
+                    watch_noise[f, i] = _first_max(watch_noise[f, i], swing_margin * spread)
+        gross_noise = _first_max(wrench_noise, swing_margin * trend_spread(
+            history_use[:, 2 + dominant_component(reference)], written))
+        array_noise = _first_max(use_noise, swing_margin * trend_spread(history_use[:, 0], written))
     # the array as a whole: against the probe's falling grip, or, in the lift, a load-driven grip (above the
     # minimum force) whose load stopped growing below what it carries; not with the grip pinned at the actuator's
     # limit (a load still coming on then keeps nu where it is, held or not: the test cannot tell them apart)
@@ -166,16 +189,13 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
     lifting = (scalars[X_PHASE] == LIFT and scalars[X_COMMAND] > AT_MINIMUM * scalars[X_MINIMUM] and not seen
                and scalars[X_COMMAND] < SATURATED * parameters[P_MAXIMUM_FORCE])
     use_mode = 1 if probed else (2 if lifting and parameters[P_STALL_FRACTION] > 0.0 else 0)
-    use_noise = math.sqrt(2.0 * parameters[P_SLOW_GAIN]) * wrench_noise / max(sensed, 1e-9)
     signature, total_ratio, bearing, magnitudes, largest, mean_force = slip_signature(
         signals[SLOW], ratios[SLOW], signals[FAST], ratios[FAST], contact, centres, history_force[oldest],
         history_ratios[oldest], judged, watch_total, reference, carried, second_frame, hold_ratio,
         parameters[P_TOTAL_DROP],
         parameters[P_FORCE_DROP], parameters[P_STICK_EXPONENT], parameters[P_LOADED_SHARE],
-        parameters[P_FORCE_SHARE], noise, wrench_noise, parameters[P_REACH], use_now, use_then,
-        # the utilisation's noise: the per-bump noise pooled, through the slow filter (variance times its gain b)
-        # and the window's difference (twice that): sqrt(2 b) of the raw margin
-        use_noise, use_mode,
+        parameters[P_FORCE_SHARE], watch_noise, gross_noise, parameters[P_REACH], use_now, use_then, array_noise,
+        use_mode,
         parameters[P_LIFT_SAFETY] * scalars[X_FRICTION],
         parameters[P_STALL_RISE], parameters[P_STALL_FRACTION])
     if scalars[X_PROBE_BEGUN] == 0.0:                 # read once, when the probe begins (_carry_step)

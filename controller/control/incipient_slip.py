@@ -36,18 +36,24 @@ centre slide first while the others hold (incipient rotational slip). Under pure
 sooner in the total tangential load of both fingertips (in one frame): equilibrium keeps it constant while the object
 holds, and a fall by ``total_drop`` together with the normal force is the grasp sliding as a whole (at its limit the
 array's utilisation nu is mu: mu_hat takes it). After the probe the total load is still watched: a gross slip seen later
-(the load grew, or mu_hat was too high) lowers mu_hat and steps the grip up again. Single bumps are judged only while
-the grip is probed down: at a held grip a bump's force changes only as the normal forces redistribute, not as the
-controller asks. A probe whose bump test cannot be relied on to see a bump slide does not start: over a window the probe
-opens a gap of |rho_i| (exp(``stick_exponent`` ``probe_rate`` window) - 1) between a stuck bump's ratio and a sliding
-one's; where neither fingertip has two watched bumps whose noise margin lies below that gap (a light object: small
-tangential loads per bump against the sensor's noise), a sliding bump is flagged only if its read ratio happens to fall
-as the loads shift, and where it was not, the probe ran on through incipient slip until the grasp slid as a whole. The
-grip then stays where the lift left it, at mu_hat = ``prior_friction`` with the lift's margin: more grip, the friction
-not measured (docs/design.md, sec. 12). Where no lift test ran, that grip is tested once, as the lift's test does
-(below), with a step sized to the utilisation's noise: a grasp sliding at a friction the sensor reads at the lift's
-level asks, like a held one, for the grip it has. Without rotational detection the bump test is not used; that probe
-starts as before and watches the total alone.
+(the load grew, or mu_hat was too high) lowers mu_hat and steps the grip up again. Each test's margin is its signal's
+noise (the sensor's rest calibration); with ``swing_margin``, once the probe's window lies in the probe, it is at least
+that many times the signal's rms spread about its trend over the window (a bump's without its newest frames, the
+confirmation's and one, which the onset of its slide bends): a held object rocks in the compliant fingers and its loads
+swing with it by several per cent, which the tests read as a load that fell with the grip - a friction read low. Off by
+default: it reads the friction closer and grips less, but waits longer for a slip that looks like a swing, and fewer
+objects are held (docs/design.md sec. 12). Single bumps are judged only while the grip is probed down: at a held grip a
+bump's force changes only as the normal forces redistribute, not as the controller asks. A probe whose bump test cannot
+be relied on to see a bump slide does not start: over a window the probe opens a gap of |rho_i| (exp(``stick_exponent``
+``probe_rate`` window) - 1) between a stuck bump's ratio and a sliding one's; where neither fingertip has two watched
+bumps whose noise margin lies below that gap (a light object: small tangential loads per bump against the sensor's
+noise), a sliding bump is flagged only if its read ratio happens to fall as the loads shift, and where it was not, the
+probe ran on through incipient slip until the grasp slid as a whole. The grip then stays where the lift left it, at
+mu_hat = ``prior_friction`` with the lift's margin: more grip, the friction not measured (docs/design.md, sec. 12).
+Where no lift test ran, that grip is tested once, as the lift's test does (below), with a step sized to the
+utilisation's noise: a grasp sliding at a friction the sensor reads at the lift's level asks, like a held one, for the
+grip it has. Without rotational detection the bump test is not used; that probe starts as before and watches the total
+alone.
 
 Lift test (once per lift, before any slip was seen). Below the lift's level (mu_hat x ``lift_safety_fraction``) sliding
 bumps carry only mu of the grip, so the demand never asks for more and the grip stays where it is - at the contact
@@ -97,12 +103,12 @@ from fem.validation import check_positive, check_range
 from ._slip_kernels import array_margin
 from ._slip_law import control_step, observe_frame
 from ._slip_state import (PHASE_CODES, P_APPROACH_FORCE, P_CONFIRM_FRAMES, P_FAST_GAIN, P_FORCE_DROP, P_FORCE_SHARE,
-                        P_FULL_SEARCH_EVERY, P_GROSS_FRAMES, P_LIFT_SAFETY, P_LOADED_SHARE, P_LOOP_RATE,
-                        P_MAXIMUM_FORCE, P_MAXIMUM_FRICTION, P_NOISE_MARGIN, P_PERIOD, P_PRIOR_FRICTION, P_PROBE_DELAY,
-                        P_PROBE_RATE, P_RAMP_RATE, P_REACH, P_RELEASE_LOOP_RATE, P_RELEASE_RATE, P_ROTATIONAL, P_SAFETY,
-                        P_SCALE_GAIN, P_SIZE, P_SLIDE_FRAMES, P_SLOW_GAIN, P_STALL_FRACTION, P_STALL_RISE,
-                        P_STICK_EXPONENT, P_TOTAL_DROP, P_WARM_STEP, P_WATCH_TIME, SLIP_KINDS, X_COMMAND, X_FRICTION,
-                        X_MINIMUM, X_NEED, X_PROBING, X_SIZE, X_SLIP_SEEN, X_TIME)
+                          P_FULL_SEARCH_EVERY, P_GROSS_FRAMES, P_LIFT_SAFETY, P_LOADED_SHARE, P_LOOP_RATE,
+                          P_MAXIMUM_FORCE, P_MAXIMUM_FRICTION, P_NOISE_MARGIN, P_PERIOD, P_PRIOR_FRICTION,
+                          P_PROBE_DELAY, P_PROBE_RATE, P_RAMP_RATE, P_REACH, P_RELEASE_LOOP_RATE, P_RELEASE_RATE,
+                          P_ROTATIONAL, P_SAFETY, P_SCALE_GAIN, P_SIZE, P_SLIDE_FRAMES, P_SLOW_GAIN, P_STALL_FRACTION,
+                          P_STALL_RISE, P_STICK_EXPONENT, P_SWING_MARGIN, P_TOTAL_DROP, P_WARM_STEP, P_WATCH_TIME,
+                          SLIP_KINDS, X_COMMAND, X_FRICTION, X_MINIMUM, X_NEED, X_PROBING, X_SIZE, X_SLIP_SEEN, X_TIME)
 from .filters import sample_period, tustin_gain
 from .references import GraspPhase
 
@@ -154,6 +160,9 @@ class IncipientSlipParameters:
     approach_force, ramp_rate, maximum_force : float -- as in ``GraspForceParameters`` [N], [N/s], [N].
     release_rate : float -- fraction of the hold force removed per second in RELEASE [1/s].
     rotational_slip_detection : bool -- False: only the translational load is used and watched.
+    swing_margin : float -- while probing, each slip test's margin is at least this many times its signal's rms
+        spread about its trend over the window [-], >= 0; 0 (the default): the sensor's noise alone. 3 keeps a held
+        object's swing in the fingers from passing for slip, at a cost in objects held (docs/design.md sec. 12).
     """
 
     sample_rate_hz: float = 1000.0
@@ -180,6 +189,7 @@ class IncipientSlipParameters:
     maximum_force: float = 30.0
     release_rate: float = 2.0
     rotational_slip_detection: bool = True
+    swing_margin: float = 0.0
 
     def __post_init__(self):
         check_positive("sample_rate_hz", self.sample_rate_hz, "Hz")
@@ -208,6 +218,7 @@ class IncipientSlipParameters:
         check_positive("ramp_rate", self.ramp_rate, "N/s")
         check_range("maximum_force", self.maximum_force, self.approach_force, math.inf, "N", True, True)
         check_positive("release_rate", self.release_rate, "1/s")
+        check_range("swing_margin", self.swing_margin, 0.0, math.inf, high_open=True)
         if not isinstance(self.rotational_slip_detection, bool):
             raise ValueError(f"rotational_slip_detection={self.rotational_slip_detection!r} must be True or False")
 
@@ -342,6 +353,7 @@ def law_parameters(parameters: IncipientSlipParameters, centres) -> np.ndarray:
                         (P_GROSS_FRAMES, min(max(round(GROSS_WINDOW * parameters.frame_rate_hz), 2),
                                              parameters.watch_frames)),
                         (P_SLIDE_FRAMES, min(max(round(SLIDE_WINDOW * parameters.frame_rate_hz), 2),
-                                             parameters.watch_frames))):
+                                             parameters.watch_frames)),
+                        (P_SWING_MARGIN, parameters.swing_margin)):
         values[slot] = value
     return values
