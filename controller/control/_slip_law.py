@@ -160,15 +160,15 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
             for column in range(3):
                 reference[column] = max(reference[column], history_use[row, 2 + column])
     carried = np.zeros(3)
+    # the utilisation's noise: the per-bump noise pooled, through the slow filter (variance times its gain b) and the
+    # window's difference (twice that): sqrt(2 b) of the raw margin
+    use_noise = math.sqrt(2.0 * parameters[P_SLOW_GAIN]) * wrench_noise / max(sensed, 1e-9)
     # the tests' margins (a bump's ratio, the carried load, the array's nu): the noise's, or, with a swing margin and
     # once the window lies in the probe, that many times the signal's rms spread about its trend over the window
     # where that is larger (a held object rocks in the compliant fingers and its loads swing with it; docs/design.md
     # sec. 12). A bump's spread leaves out the newest frames of its history, the confirmation's and one: the onset of
     # its slide bends them, and a margin that grew with it saw the slide later, the array by then sliding as a whole
     # and read low. The carried load's and nu's keep them (left out of the gross test's too, the swing's fall passed it)
-    # the utilisation's noise: the per-bump noise pooled, through the slow filter (variance times its gain b) and the
-    # window's difference (twice that): sqrt(2 b) of the raw margin
-    use_noise = math.sqrt(2.0 * parameters[P_SLOW_GAIN]) * wrench_noise / max(sensed, 1e-9)
     watch_noise, gross_noise, array_noise = noise, wrench_noise, use_noise
     swing_margin = parameters[P_SWING_MARGIN]
     if probed and swing_margin > 0.0:
