@@ -139,3 +139,15 @@ def test_table_contact_sensor_is_the_contact_list():
         assert world._touches_table() == scanned
         seen.add(scanned)
     assert seen == {True, False}
+
+
+def test_the_trials_swing_margin_reaches_the_law():
+    """``TrialSettings.swing_margin`` is the law's, as rotational detection is: in its parameters and in the parameter
+    vector the compiled kernels read (0 by default: the tests' margins are the sensor's noise alone)."""
+    from controller.control._slip_state import P_SWING_MARGIN
+
+    for margin in (0.0, 3.0):
+        grasp = GraspWorld(TABLE_I_OBJECTS["eclair"], replace(SETTINGS, swing_margin=margin)).grasp
+        assert isinstance(grasp, IncipientSlipController)
+        assert grasp.parameters.swing_margin == margin and grasp.law[P_SWING_MARGIN] == margin
+    assert TrialSettings().swing_margin == 0.0
