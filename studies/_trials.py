@@ -168,11 +168,10 @@ def add_swing_argument(parser) -> None:
 
 
 def check_swing_margin(swing_margin) -> float:
-    """``--swing-margin`` must be a number >= 0 [-]."""
-    if isinstance(swing_margin, bool) or not isinstance(swing_margin, (int, float)) or \
-            not 0.0 <= swing_margin < math.inf:
-        raise ValueError(f"--swing-margin={swing_margin!r} must be a number >= 0")
-    return float(swing_margin)
+    """``--swing-margin`` must be a finite number >= 0 [-]."""
+    from fem.validation import check_range
+
+    return check_range("--swing-margin", swing_margin, 0.0, math.inf, high_open=True)
 
 
 def plant_options(plant_spread=None, plant=None, sensor_plane="fem", swing_margin=0.0) -> dict:

@@ -70,15 +70,12 @@ def run(out_dir, quick: bool = False, trials: int | None = None, processes: int 
     options = plant_options(plant_spread, plant, sensor_plane, swing_margin)
     hold = 2.0 if quick else 4.0
     plane = options["sensor_plane"]
-    series_settings = {"bottle": ("bottle_horizontal", TrialSettings(friction_coefficient=FRICTION, hold_time=hold,
-                                                                     seed=3, sensor_plane=plane,
-                                                                     swing_margin=options["swing_margin"])),
+    common = dict(hold_time=hold, seed=3, sensor_plane=plane, swing_margin=options["swing_margin"])
+    series_settings = {"bottle": ("bottle_horizontal", TrialSettings(friction_coefficient=FRICTION, **common)),
                        "eclair_with_rotation": ("eclair", TrialSettings(friction_coefficient=ECLAIR_FRICTION,
-                                                                        hold_time=hold, seed=3, sensor_plane=plane,
-                                                                        swing_margin=options["swing_margin"])),
+                                                                        **common)),
                        "eclair_without_rotation": ("eclair", TrialSettings(
-                           friction_coefficient=ECLAIR_FRICTION, hold_time=hold, seed=3,
-                           rotational_slip_detection=False, sensor_plane=plane, swing_margin=options["swing_margin"]))}
+                           friction_coefficient=ECLAIR_FRICTION, rotational_slip_detection=False, **common))}
     finished = {}                                    # trials finish in any order; the outputs keep the cases' order
     for index, result in run_trials([(TABLE_I_OBJECTS[name], s) for name, s in series_settings.values()],
                                     processes):

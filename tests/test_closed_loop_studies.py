@@ -223,10 +223,11 @@ def test_the_swing_margin_option_reaches_the_trials_and_bad_ones_are_refused_by_
         assert settings.swing_margin == 0.0 and wide_settings == replace(settings, swing_margin=3.0)
         assert wide_key != key
     assert plant_options(swing_margin=3)["swing_margin"] == 3.0
+    refused = r"--swing-margin=.* (outside allowed range \[0.0, inf\)|is not a number)"
     for bad in (-1.0, math.inf, math.nan, True, "3"):
-        with pytest.raises(ValueError, match=r"--swing-margin=.* must be a number >= 0"):
+        with pytest.raises(ValueError, match=refused):
             tuning.jobs(["eclair"], trials=1, swing_margin=bad)
-        with pytest.raises(ValueError, match=r"--swing-margin=.* must be a number >= 0"):
+        with pytest.raises(ValueError, match=refused):
             plant_options(swing_margin=bad)
 
 

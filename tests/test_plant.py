@@ -147,7 +147,6 @@ def test_the_estimator_does_not_know_the_plant():
     assert math.isfinite(fem["ratio_relative"])
 
 
-
 def test_the_plant_and_the_bench_cover_the_drive_and_read_a_twist_alike_across_it():
     # the packaged fields reach the finger drive's 30 N (beyond its last level a field holds its end value), and the
     # bench-fitted estimator follows the plant's tangential loads under a fixed twist from 16 to 28 N: on average
@@ -173,6 +172,7 @@ def test_the_plant_and_the_bench_cover_the_drive_and_read_a_twist_alike_across_i
     plant_change = loads[28.0][0][twisted] / loads[16.0][0][twisted]
     read_change = loads[28.0][1][twisted] / loads[16.0][1][twisted]
     assert abs(np.mean(read_change / plant_change) - 1.0) < 0.04
+
 
 def test_plant_and_estimator_share_no_arrays():
     # what the loop's estimator holds is computed from bench records; none of it is the plant's own table
