@@ -11,8 +11,8 @@ from fem.compiled import njit_cached
 
 from ._slip_state import (LIFT, MINIMUM_FRICTION, P_CONFIRM_FRAMES, P_FORCE_DROP, P_LIFT_SAFETY, P_MAXIMUM_FORCE,
                           P_STALL_RISE, SATURATED, X_COMMAND, X_FRICTION, X_LIFT_FRAMES, X_LIFT_GRIP, X_LIFT_HELD,
-                          X_LIFT_HOLD, X_LIFT_STEP, X_LIFT_TEST, X_LIFT_UNJUDGED, X_LIFT_USE, X_PHASE, X_PROBING,
-                          _first_max, _first_min, _force_scale)
+                          X_LIFT_HOLD, X_LIFT_SIZED, X_LIFT_STEP, X_LIFT_TEST, X_LIFT_UNJUDGED, X_LIFT_USE, X_PHASE,
+                          X_PROBING, _first_max, _first_min, _force_scale)
 
 # the lift's test (``_lift_test``): a step up of the grip by this fraction, held for a watch window. Half: a held
 # load's nu then falls by log(1.5) = 0.41, and the verdict halfway (0.2) clears the noise margin at the contact
@@ -65,30 +65,44 @@ def _lift_test(parameters, scalars, signature, count, use_now, use_then, use_noi
     (signature[1, count]: mu_hat becomes nu), held lets the grip go back to its demand. Not while the probe runs (it
     lowers the grip on purpose); a test still running when the lift ends is judged on into the hold. The same test
     runs when nu has sat still at the level or above while the grip grew by LIFT_GROWTH over the window: bumps that
-    slide at a friction just above the level keep nu = mu and the demand creeps up with the grip. It starts only
-    where the lift's stall test cannot see: blind in its noise, or not judging at all because the grip is at the
-    contact minimum (``at_minimum``: the stall test judges only a load-driven grip). It also starts, whatever nu
-    does, where a probe that could not rely on its bump test did not start (LIFT_ASKED, ``_carry_step``): nu read
-    at the level is a held load's or one sliding at a friction read there, and only the step tells them apart - a
-    step sized to nu's noise there (``_lift_step``). A step the sensed grip does not follow by twice force_drop
-    gives no verdict, which is not 'held': after a whole window without one the grip steps up again by the same factor,
-    up to the actuator's limit, where the test ends (nothing is left to step)."""
+    slide at a friction just above the level keep nu = mu and the demand creeps up with the grip. The test of a load
+    below the level starts only where the lift's stall test cannot see: blind in its noise, or not judging at all
+    because the grip is at the contact minimum (``at_minimum``: the stall test judges only a load-driven grip). The
+    test of a creeping grip starts wherever one is seen, nu still within the larger of its noise margin and twice
+    STALL_RISE of nu (a margin between one and two STALL_RISE leaves the stall test nothing to pass, yet does not make
+    it blind); where the stall test is neither blind nor idle at the minimum, with a step sized to nu's noise
+    (``_lift_step``) instead of one of half. It also starts, whatever nu does, where a probe that could not rely on
+    its bump test did not start (LIFT_ASKED, ``_carry_step``): nu read at the level is a held load's or one sliding at
+    a friction read there, and only the step tells them apart - a step sized to nu's noise there too. A slip confirmed
+    while a sized step is held reads the larger of nu at the step (X_LIFT_USE) and nu then (``_slip_law``;
+    X_LIFT_SIZED marks the test): the test began where nu sat at the level. A step the sensed grip does not follow by
+    twice force_drop gives no verdict, which is not 'held': after a whole window without one the grip steps up again
+    by the same factor, up to the actuator's limit, where the test ends (nothing is left to step)."""
     level = parameters[P_LIFT_SAFETY] * scalars[X_FRICTION]
     if scalars[X_LIFT_TEST] == LIFT_UNTRIED or scalars[X_LIFT_TEST] == LIFT_ASKED:
         still = abs(use_now[0] - use_then[0]) <= use_noise
         below = max(use_now[0], use_then[0]) + use_noise < level
-        creeping = (use_now[0] >= level - use_noise and use_spread <= use_noise
+        # nu 'still' for a creeping grip: within its noise margin, and never within less than twice the rise the
+        # stall test allows (a sliding array's read nu wobbles with the estimator's error as its loads shift)
+        still_band = _first_max(use_noise, 2.0 * parameters[P_STALL_RISE] * use_now[0])
+        creeping = (use_now[0] >= level - use_noise and use_spread <= still_band
+                    and abs(use_now[0] - use_then[0]) <= still_band
                     and use_now[1] >= (1.0 + LIFT_GROWTH) * use_then[1])
-        # only where the lift's own stall test cannot see: its noise margin more than twice the rise it allows, or
-        # it does not judge at all - the grip at the contact minimum (a quiet array's margin is small there, and an
-        # object sliding at that grip was seen by neither test)
+        # below the level, only where the lift's own stall test cannot see: its noise margin more than twice the
+        # rise it allows, or it does not judge at all - the grip at the contact minimum (a quiet array's margin is
+        # small there, and an object sliding at that grip was seen by neither test)
         stall_cannot_see = use_noise > 2.0 * parameters[P_STALL_RISE] * use_now[0] or at_minimum
         readable = use_now[1] > 0.0 and full and MINIMUM_FRICTION < use_now[0]
         asked = scalars[X_LIFT_TEST] == LIFT_ASKED
         unseen = (scalars[X_PHASE] == LIFT and scalars[X_PROBING] == 0.0 and MINIMUM_FRICTION < use_then[0]
-                  and stall_cannot_see and still and (below or creeping))
+                  and ((stall_cannot_see and still and below) or creeping))
         if readable and (asked or unseen):
-            scalars[X_LIFT_STEP] = _lift_step(use_now[0], use_noise) if asked else 1.0 + LIFT_STEP
+            # a step of half where the stall test is blind or idle; sized to nu's noise where it could see, as for an
+            # asked test: half took light, moment-loaded eclairs whose moment was still coming on past their crush
+            # force (docs/design.md sec. 12)
+            sized = asked or (creeping and not stall_cannot_see)
+            scalars[X_LIFT_STEP] = _lift_step(use_now[0], use_noise) if sized else 1.0 + LIFT_STEP
+            scalars[X_LIFT_SIZED] = 1.0 if sized else 0.0
             scalars[X_LIFT_TEST], scalars[X_LIFT_FRAMES], scalars[X_LIFT_HELD] = LIFT_STEPPED, 0.0, 0.0
             scalars[X_LIFT_UNJUDGED] = 0.0
             # the step's reference grip: the command in the sensed scale, which the slowly filtered grip lags when

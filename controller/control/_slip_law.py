@@ -26,11 +26,12 @@ from ._slip_state import (APPROACH, ARRAY_SLIP, AT_MINIMUM, BUMP_SLIP, FAST, FAS
                           P_ROTATIONAL, P_SAFETY, P_SCALE_GAIN, P_SLIDE_FRAMES, P_SLOW_GAIN, P_STALL_FRACTION,
                           P_STALL_RISE, P_STICK_EXPONENT, P_SWING_MARGIN, P_TOTAL_DROP, P_WARM_STEP, P_WATCH_TIME,
                           RATIO_NOISE, RELEASE, SATURATED, SLOW, SLOW_PREVIOUS, X_CARRY_SLIP, X_CARRY_TIME, X_COMMAND,
-                          X_COMMAND_MEAN, X_CONTACTS, X_FRAMES, X_FRICTION, X_GRIP, X_HISTORY, X_LIFT_HOLD, X_LIFT_TEST,
-                          X_MINIMUM, X_NEED, X_PHASE, X_PLACE_FORCE, X_PROBED, X_PROBE_BEGUN, X_PROBING,
-                          X_RELEASE_FORCE, X_RELEASE_NEED, X_RELEASING, X_SENSED, X_SENSED_MEAN, X_SENSED_SLOW,
-                          X_SLIDING, X_SLID_GRIP, X_SLID_HELD, X_SLID_USE, X_SLIP_SEEN, X_STARTED, X_TIME, X_USE_SLOW,
-                          X_VISIBLE, X_WATCHING, _ema, _first_max, _first_min, _force_scale)
+                          X_COMMAND_MEAN, X_CONTACTS, X_FRAMES, X_FRICTION, X_GRIP, X_HISTORY, X_LIFT_HOLD,
+                          X_LIFT_SIZED, X_LIFT_TEST, X_LIFT_USE, X_MINIMUM, X_NEED, X_PHASE, X_PLACE_FORCE, X_PROBED,
+                          X_PROBE_BEGUN, X_PROBING, X_RELEASE_FORCE, X_RELEASE_NEED, X_RELEASING, X_SENSED,
+                          X_SENSED_MEAN, X_SENSED_SLOW, X_SLIDING, X_SLID_GRIP, X_SLID_HELD, X_SLID_USE, X_SLIP_SEEN,
+                          X_STARTED, X_TIME, X_USE_SLOW, X_VISIBLE, X_WATCHING, _ema, _first_max, _first_min,
+                          _force_scale)
 
 __all__ = ["observe_frame", "control_step"]
 
@@ -246,6 +247,11 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
             finger, index, measured = 0, count, scalars[X_NEED]
         elif streak[1, count] >= confirm:                           # the array's utilisation stayed at mu
             finger, index, measured = 1, count, scalars[X_NEED]
+            # confirmed while a lift test holds a sized step: that test began where nu sat at the level, and nu now,
+            # confirm frames into the verdict, may already fall as the grip catches the object (read low, the catch
+            # that followed crushed an eclair on a tuning draw)
+            if scalars[X_LIFT_TEST] == LIFT_STEPPED and scalars[X_LIFT_SIZED] > 0.0:
+                measured = _first_max(measured, scalars[X_LIFT_USE])
         else:
             return NO_SLIP
     if not measured >= MINIMUM_FRICTION:     # no load to speak of (or none at all): not a friction measurement
