@@ -72,18 +72,18 @@ mu, so the demand asks only mu / level more than the grip and the grip creeps up
 0.32 slid 35 mm in the lift). A grip that grew by ``_lift_test.LIFT_GROWTH`` over the window while nu sat still at the
 level or above is tested the same way (its reference grip is the command in the sensed scale: the slowly filtered grip
 lags a growing one, and the lag would pass for a rise) - wherever it is seen, not only where the stall test is blind: nu
-'still' within the larger of its noise margin and twice ``STALL_RISE`` (a margin between one and two STALL_RISE leaves
-the stall test nothing to pass, yet did not count as blind), and where the stall test could have judged, with a step
-sized to nu's noise as for an asked test (half took light eclairs whose moment was still coming on past their crush
-force). A slide confirmed by a test with such a step reads the larger of nu at the step and nu at the verdict: the test
-began where nu sat at the level, and a few frames into the verdict nu already falls as the grip catches. After a slip
-seen in the lift, while the array still slides, the demand grows from the command at nu = mu_hat rather than from the
-slowly filtered grip at the nu it reads: that filter keeps the object's swing out of the demand, but it lags a grip that
-must grow several-fold, and an array that slides is at its limit whatever it reads (an estimator whose scale error
-changes with the force reads it below the mu_hat its slip set). It still slides while its nu does not fall with the
-growing grip - halfway between held and sliding, as the lift's test - over the last ``SLIDE_WINDOW`` of the fast
-signals, or, where the grip grew too little there for a verdict, over the window of the slow ones once that lies after
-the fast test's last 'held'; with no verdict, while nu reads at least mu_hat.
+'still' within the larger of its noise margin and twice ``STALL_RISE`` of nu (a margin between one and two STALL_RISE
+leaves the stall test nothing to pass, yet did not count as blind), and where the stall test could have judged, with a
+step sized to nu's noise as for an asked test (half took light eclairs whose moment was still coming on past their crush
+force). A slip confirmed while such a step is held (this test's or an asked test's) reads the larger of nu at the step
+and nu at the verdict: the test began where nu sat at the level, and a few frames into the verdict nu already falls as
+the grip catches. After a slip seen in the lift, while the array still slides, the demand grows from the command at nu =
+mu_hat rather than from the slowly filtered grip at the nu it reads: that filter keeps the object's swing out of the
+demand, but it lags a grip that must grow several-fold, and an array that slides is at its limit whatever it reads (an
+estimator whose scale error changes with the force reads it below the mu_hat its slip set). It still slides while its nu
+does not fall with the growing grip - halfway between held and sliding, as the lift's test - over the last
+``SLIDE_WINDOW`` of the fast signals, or, where the grip grew too little there for a verdict, over the window of the
+slow ones once that lies after the fast test's last 'held'; with no verdict, while nu reads at least mu_hat.
 
 A lift's grip pinned at the actuator's limit (``maximum_force``) is not judged by the lift's stall test: a load still
 coming on keeps nu where it is at a grip that cannot follow, held or sliding alike. The probe, later, finds the
