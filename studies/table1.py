@@ -61,8 +61,7 @@ def _row(result, info) -> dict:
 
 def run(out_dir, quick: bool = False, trials: int | None = None, seed: int | None = None,
         processes: int | None = None, objects: list[str] | None = None, plant_spread: float | None = None,
-        plant: str | None = None, sensor_plane: str = "fem",
-        swing_margin: float = 0.0) -> dict:
+        plant: str | None = None, sensor_plane: str = "fem", swing_margin: float = 0.0) -> dict:
     """Run the trials of every Table I object (or of ``objects``); CSV, summary JSON and figure."""
     from controller.closed_loop import CREEP_WINDOW, HELD_OUT_SEED, TABLE_I_OBJECTS
 
