@@ -21,11 +21,11 @@ bench built, Table I trials run; the closed-loop columns (``GRASP_METRICS``, ``F
 ``python -m studies design DESIGN.toml`` is the command (file format: ``controller.design._file``).
 """
 
-from ._evaluate import design_record, evaluate_designs
+from ._evaluate import evaluate_designs
 from ._file import DesignSweepSpec, load_design_file
 from ._grasp import FIT_METRICS, GRASP_METRICS, array_design, grasp_refusal, wilson_interval
 from ._metrics import METRICS
-from ._spec import DesignStudy, FingertipDesign, SensorModel, design_id, design_scenes, fem_key, twist_angles
+from ._spec import DesignStudy, FingertipDesign, SensorModel, design_id, design_scenes, twist_angles
 from ._sweep import design_sweep
 from ._table import CLOSED_LOOP_COLUMNS, DESIGN_COLUMNS, design_table, increment_table, pareto_front
 
