@@ -26,6 +26,13 @@ def _first_line(module) -> str:
     return (module.__doc__ or "").strip().splitlines()[0] if module.__doc__ else ""
 
 
+def _out_folder(text: str) -> Path:
+    """--out's value: a folder path, not empty (an empty one was taken as the current folder)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError(f"{text!r} is empty: give a folder")
+    return Path(text)
+
+
 def build_parser() -> argparse.ArgumentParser:
     """Parser with one sub-command per study module."""
     parser = argparse.ArgumentParser(
@@ -36,7 +43,7 @@ def build_parser() -> argparse.ArgumentParser:
     for name, module in find_studies().items():
         sub = commands.add_parser(name, help=_first_line(module), description=module.__doc__,
                                   formatter_class=argparse.RawDescriptionHelpFormatter)
-        sub.add_argument("--out", type=Path, default=Path("results"), help="output folder (default: results/)")
+        sub.add_argument("--out", type=_out_folder, default=Path("results"), help="output folder (default: results/)")
         sub.add_argument("--quick", action="store_true", help="coarse settings for a fast look")
         sub.add_argument("--debug", action="store_true", help="show the Python traceback of an error")
         if hasattr(module, "add_arguments"):
@@ -64,15 +71,20 @@ def main(argv: list[str] | None = None) -> int:
     """Run one study; print where its outputs went, its largest error against theory and its wall time.
 
     Returns 0 on success, 2 for a bad input, 1 for a failed computation (the message on stderr)."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    module = find_studies()[args.study]
-    options = {k: v for k, v in vars(args).items() if k not in ("study", "out", "quick", "debug")}
-    start = time.perf_counter()
+    argv = sys.argv[1:] if argv is None else list(argv)
     with warnings.catch_warnings():
-        if not args.debug:
+        # from the start: importing the studies may warn (an unwritable cache); --de ... abbreviate --debug
+        if not any(arg.startswith("--de") and "--debug".startswith(arg) for arg in argv):
             warnings.showwarning = _show_warning
+        parser = build_parser()
+        args = parser.parse_args(argv)
+        module = find_studies()[args.study]
+        options = {k: v for k, v in vars(args).items() if k not in ("study", "out", "quick", "debug")}
+        start = time.perf_counter()
         try:
+            from studies.run import check_out_folder
+
+            check_out_folder(args.out)        # before any work: a file, a read-only place, a path under a file
             summary = module.run(args.out, quick=args.quick, **options) or {}
         except Exception as error:
             code = _exit_code(error)

@@ -42,10 +42,13 @@ def closed_loop_sources() -> str:
     return digest.hexdigest()
 
 
+MAX_TRIALS = 1000             # per object or case: fig6's and the design file's grasp trials have the same bound
+
+
 def check_trials(trials) -> int:
-    """``trials`` per object or case must be an integer >= 1 (not a bool)."""
-    if isinstance(trials, bool) or not isinstance(trials, int) or trials < 1:
-        raise ValueError(f"trials={trials!r} must be an integer >= 1")
+    """``trials`` per object or case must be an integer in [1, MAX_TRIALS] (not a bool)."""
+    if isinstance(trials, bool) or not isinstance(trials, int) or not 1 <= trials <= MAX_TRIALS:
+        raise ValueError(f"trials={trials!r} must be an integer in [1, {MAX_TRIALS}]")
     return trials
 
 
@@ -179,6 +182,9 @@ def plant_options(plant_spread=None, plant=None, sensor_plane="fem", swing_margi
     from controller.closed_loop import PLANT_SPREAD
     from controller.plant import FACTOR_LIMIT, PlantFactors, SensorPlane
 
+    if plant is not None and plant_spread is not None:
+        raise ValueError(f"--plant={plant!r} fixes the plant factors and --plant-spread={plant_spread!r} draws them: "
+                         f"give one")
     spread = PLANT_SPREAD if plant_spread is None else plant_spread
     if isinstance(spread, bool) or not isinstance(spread, (int, float)) or not 0.0 <= spread <= FACTOR_LIMIT:
         raise ValueError(f"--plant-spread={plant_spread!r} must be a number in [0, {FACTOR_LIMIT}]")
@@ -187,7 +193,7 @@ def plant_options(plant_spread=None, plant=None, sensor_plane="fem", swing_margi
         plane = SensorPlane(sensor_plane)
     except ValueError:
         raise ValueError(f"--sensor-plane={sensor_plane!r} is not one of {[p.value for p in SensorPlane]}") from None
-    return dict(plant_spread=float(spread), plant=factors, sensor_plane=plane,
+    return dict(plant_spread=abs(float(spread)), plant=factors, sensor_plane=plane,
                 swing_margin=check_swing_margin(swing_margin))
 
 

@@ -12,6 +12,7 @@ printed output to ``logs/NAME.log``. A failing study is reported as failed; the 
 
 from __future__ import annotations
 
+import argparse
 import ast
 import contextlib
 import hashlib
@@ -38,12 +39,20 @@ EXPECTED_SECONDS = {"convergence": 140, "fig6": 190, "fig3": 250, "fig4": 85, "f
                     "table1": 35, "robustness": 310}
 
 
+def _study_names(text: str) -> list[str]:
+    """--only's value: study names separated by commas, at least one."""
+    names = [name for name in text.split(",") if name]
+    if not names:
+        raise argparse.ArgumentTypeError(f"{text!r} names no study")
+    return names
+
+
 def add_arguments(parser) -> None:
     """Options of ``python -m studies all``."""
     parser.add_argument("--jobs", type=int, default=2,
                         help="worker processes (default 2; 1 runs the studies in this process, one after another)")
-    parser.add_argument("--only", type=lambda text: [name for name in text.split(",") if name],
-                        default=None, metavar="NAME,NAME", help="run and report only these studies")
+    parser.add_argument("--only", type=_study_names, default=None, metavar="NAME,NAME",
+                        help="run and report only these studies")
     parser.add_argument("--force", action="store_true", help="recompute even the studies that are up to date")
 
 
@@ -68,10 +77,10 @@ def run(out_dir, quick: bool = False, jobs: int = 2, only=None, force: bool = Fa
     if jobs < 1:
         raise ValueError(f"jobs={jobs!r} outside allowed range [1, inf)")
     out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
     start = time.perf_counter()
     modules, import_errors = discover()
     names = selected_names(modules, import_errors, only)
+    out_dir.mkdir(parents=True, exist_ok=True)
     records, todo = {}, []
     for name in names:
         if name in import_errors:
@@ -128,6 +137,8 @@ def selected_names(modules: dict, import_errors: dict, only=None) -> list[str]:
     names = [*CLAIMS, *extra]
     if only is None:
         return names
+    if not only:
+        raise ValueError(f"--only={only!r} names no study; allowed: {names}")
     unknown = [n for n in only if n not in names]
     if unknown:
         raise ValueError(f"--only: unknown study name(s) {unknown}; allowed: {names}")
@@ -265,10 +276,17 @@ def _run_parallel(tasks, jobs: int) -> dict:
     """Each task in a fresh 'spawn' worker process (no forked solver threads), BLAS threads shared out by jobs."""
     import multiprocessing
 
-    threads = max(1, (os.cpu_count() or 1) // jobs)
+    from controller.closed_loop._batch import MAX_PROCESSES
+
+    try:
+        cpus = len(os.sched_getaffinity(0))         # the CPUs this process may use, not the host's
+    except AttributeError:                          # not on Linux
+        cpus = os.cpu_count() or 1
+    threads = max(1, cpus // jobs)
     records = {}
-    with ProcessPoolExecutor(max_workers=min(jobs, len(tasks)), mp_context=multiprocessing.get_context("spawn"),
-                             initializer=_limit_threads, initargs=(threads,)) as pool, _progress(tasks) as bar:
+    pool = ProcessPoolExecutor(max_workers=min(jobs, len(tasks)), mp_context=multiprocessing.get_context("spawn"),
+                               initializer=_limit_threads, initargs=(threads, min(threads, MAX_PROCESSES)))
+    with pool, _progress(tasks) as bar:
         futures = {pool.submit(run_study, *task): task[0] for task in tasks}
         print(f"{NAME}: running {', '.join(futures.values())} on {min(jobs, len(tasks))} workers")
         for future in as_completed(futures):
@@ -283,10 +301,11 @@ def _run_parallel(tasks, jobs: int) -> dict:
     return records
 
 
-def _limit_threads(threads: int) -> None:
+def _limit_threads(threads: int, processes: int) -> None:
     """Share the CPUs out: BLAS threads, and the closed-loop studies' trial workers (``default_processes``)."""
-    for variable in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS", "FINGERTIP_PROCESSES"):
+    for variable in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
         os.environ.setdefault(variable, str(threads))
+    os.environ.setdefault("FINGERTIP_PROCESSES", str(processes))
 
 
 def _announce(record: dict) -> dict:

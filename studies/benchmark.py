@@ -48,7 +48,8 @@ RIGHT_HAND_SIDES = 256       # unit right-hand sides per timed multi-RHS solve (
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("--repeats", type=int, default=3, help="solves per setting; medians are reported")
+    parser.add_argument("--repeats", type=int, default=None,
+                        help="solves per setting (1 to 1000, default 3, quick 1); medians are reported")
     parser.add_argument("--scaling", action="store_true",
                         help="HCM-1 from 17k to 191k DOF: whole solve against mesh + assembly + factorization + one "
                              "back-substitution per contact unknown")
@@ -63,7 +64,7 @@ def add_arguments(parser) -> None:
                         help="time with one thread, the default threads, or both side by side (default)")
 
 
-def run(out_dir, quick: bool = False, repeats: int = 3, factorizations: bool = False, scaling: bool = False,
+def run(out_dir, quick: bool = False, repeats: int | None = None, factorizations: bool = False, scaling: bool = False,
         substeps: bool = False, threads: str = "both", finite_strain: bool = False) -> dict:
     """Time the HCM-1 path; write benchmark.csv (one row per thread setting and repeat) and benchmark.json (the
     thread settings, then the medians per thread setting)."""
@@ -72,24 +73,24 @@ def run(out_dir, quick: bool = False, repeats: int = 3, factorizations: bool = F
     from fem.validation import check_integer
     from studies._threads import describe_threads, limited_threads, thread_modes, thread_settings
 
-    check_integer("--repeats", repeats, 1, 1000)
+    # --quick sets the default; a count given explicitly is kept
+    repeats = check_integer("--repeats", (1 if quick else 3) if repeats is None else repeats, 1, 1000)
     modes = thread_modes(threads)
     if scaling:
         return cost_scaling(out_dir, quick, modes)
     if factorizations:
-        return compare_factorizations(out_dir, quick, 1 if quick else repeats, modes)
+        return compare_factorizations(out_dir, quick, repeats, modes)
     if substeps:
         from studies._benchmark_substeps import compare_substeps
 
-        return compare_substeps(out_dir, quick, 1 if quick else repeats, modes)
+        return compare_substeps(out_dir, quick, repeats, modes)
     if finite_strain:
         from studies._benchmark_finite_strain import compare_finite_strain
 
-        return compare_finite_strain(out_dir, quick, 1 if quick else repeats, modes)
+        return compare_finite_strain(out_dir, quick, repeats, modes)
     scene = load_scene(SCENE)
     if quick:
         scene = dataclasses.replace(scene, mesh=dataclasses.replace(scene.mesh, size_contact=0.25))
-        repeats = 1
     settings = thread_settings()
     rows = []
     for repeat in range(repeats):

@@ -3,11 +3,11 @@
 For each Table I object, one full trial (approach, grasp, lift, hold 4 s, place, release: 10 s simulated) at the
 default rates (MuJoCo and contact at ``PHYSICS_RATE_HZ``, actuator loop at 8 kHz) and, for comparison, with MuJoCo
 and the contact at 8 kHz (the rate the explicit loop needed). CPU time (``time.process_time``, robust to other jobs
-on the machine) of building the world and of running it, medians over ``--repeats``; the floor is the CPU time of the same number of
-bare ``mj_step`` calls on the same world (object on the table, no contact forces); cost / floor says how much the
-contact, the actuator loop, the sensing and the controller add to MuJoCo's own step. The outcomes of the two rates
-(hold force, largest rotation) are reported side by side. Throughput: ``--trials`` random Table I trials over 1 and
-2 worker processes, trials per wall-clock second.
+on the machine) of building the world and of running it, medians over ``--repeats``; the floor is the CPU time of the
+same number of bare ``mj_step`` calls on the same world (object on the table, no contact forces); cost / floor says
+how much the contact, the actuator loop, the sensing and the controller add to MuJoCo's own step. The outcomes of the
+two rates (hold force, largest rotation) are reported side by side. Throughput: ``--trials`` random Table I trials over
+1 and 2 worker processes, trials per wall-clock second.
 Outputs: closed_loop_benchmark.csv (one row per object, rate and repeat), closed_loop_benchmark.json (medians and
 ratios), closed_loop_benchmark.png/pdf.
 """
@@ -29,8 +29,10 @@ TARGET_REAL_TIME_FACTOR = 50.0            # simulated s per CPU s of one trial (
 
 
 def add_arguments(parser) -> None:
-    parser.add_argument("--repeats", type=int, default=3, help="runs per object and rate; medians are reported")
-    parser.add_argument("--trials", type=int, default=None, help="trials for the throughput test (default 8, quick 4)")
+    parser.add_argument("--repeats", type=int, default=None,
+                        help="runs per object and rate (1 to 1000, default 3, quick 1); medians are reported")
+    parser.add_argument("--trials", type=int, default=None,
+                        help="trials for the throughput test (2 to 1000, default 8, quick 4)")
 
 
 def _floor_seconds(world, steps: int) -> float:
@@ -57,18 +59,16 @@ def _timed_trial(obj, settings):
     return result, built - start, finished - built, _floor_seconds(world, steps)
 
 
-def run(out_dir, quick: bool = False, repeats: int = 3, trials: int | None = None) -> dict:
+def run(out_dir, quick: bool = False, repeats: int | None = None, trials: int | None = None) -> dict:
     """Time trials per object and rate, the bare-step floor and the pool's throughput; CSV, JSON and figure."""
     from controller.closed_loop import TABLE_I_OBJECTS, TrialSettings, random_settings, run_trial, run_trials
+    from fem.validation import check_integer
 
-    if repeats < 1:
-        raise ValueError(f"repeats={repeats!r} must be >= 1")
+    # --quick sets the defaults; a count given explicitly is kept
+    repeats = check_integer("--repeats", (1 if quick else 3) if repeats is None else repeats, 1, 1000)
+    trials = check_integer("--trials", (4 if quick else 8) if trials is None else trials, 2, 1000)
     out_dir = Path(out_dir)
     names = ["eclair"] if quick else list(TABLE_I_OBJECTS)
-    repeats = 1 if quick else repeats
-    trials = (4 if quick else 8) if trials is None else int(trials)
-    if trials < 2:
-        raise ValueError(f"trials={trials!r} must be >= 2 (one per process)")
     base = TrialSettings(friction_coefficient=0.8, hold_time=1.0 if quick else 4.0, seed=5)
     rates = (base.physics_rate_hz, REFERENCE_RATE)
     run_trial(TABLE_I_OBJECTS["eclair"], replace(base, hold_time=0.0, place=False))      # compile, warm the caches
@@ -101,7 +101,8 @@ def run(out_dir, quick: bool = False, repeats: int = 3, trials: int | None = Non
     reference = [summary["configurations"][f"{name}@{rates[1]:g}Hz"] for name in names]
     summary["real_time_factor_median"] = statistics.median(d["real_time_factor"] for d in default)
     summary["cost_over_floor_median"] = statistics.median(d["cost_over_floor"] for d in default)
-    summary["speedup_over_reference"] = statistics.median(r["run_cpu_s"] / d["run_cpu_s"] for d, r in zip(default, reference))
+    summary["speedup_over_reference"] = statistics.median(r["run_cpu_s"] / d["run_cpu_s"]
+                                                          for d, r in zip(default, reference))
     summary["hold_force_difference_reference"] = max(abs(d["hold_force_mean"] / r["hold_force_mean"] - 1.0)
                                                 for d, r in zip(default, reference))
     summary["throughput"] = _throughput(TABLE_I_OBJECTS, base, trials, random_settings, run_trials)

@@ -36,7 +36,7 @@ OBJECTS = ("eclair", "bottle_horizontal")
 def add_arguments(parser) -> None:
     parser.add_argument("--trials", type=int, default=None, help=f"trials per object and setting (default {TRIALS}, "
                                                                   "quick 2)")
-    parser.add_argument("--processes", type=int, default=None, help="worker processes (default: every CPU)")
+    parser.add_argument("--processes", type=int, default=None, help="worker processes, 1 to 256 (default: every CPU)")
     add_plant_arguments(parser)
     add_swing_argument(parser)
 

@@ -34,7 +34,7 @@ CLOSE_MEAN, CLOSE_MAX = 1.3, 1.5      # the issue's 'close to tau_min': mean and
 
 def add_arguments(parser) -> None:
     parser.add_argument("--trials", type=int, default=None, help=f"trials per case (default {TRIALS}, quick 1)")
-    parser.add_argument("--processes", type=int, default=None, help="worker processes (default: every CPU)")
+    parser.add_argument("--processes", type=int, default=None, help="worker processes, 1 to 256 (default: every CPU)")
     add_plant_arguments(parser)
     add_swing_argument(parser)
 

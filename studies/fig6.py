@@ -48,18 +48,22 @@ def add_arguments(parser) -> None:
                         help="with --grasp: trials per Table I object (default 10; quick 1)")
     parser.add_argument("--grasp-only", action="store_true",
                         help="with --grasp: skip the FEM bench (the panel then shows the design study's error only)")
-    parser.add_argument("--workers", type=int, default=2, help="with --grasp: design-sweep workers (default 2)")
+    parser.add_argument("--workers", type=int, default=None, help="with --grasp: design-sweep workers (default 2)")
 
 
-def check_grasp_options(grasp: bool, grasp_trials, grasp_only: bool, workers) -> None:
-    """Refuse bad --grasp options by name (ValueError: exit code 2 on the command line)."""
+def check_grasp_options(grasp: bool, grasp_trials, grasp_only: bool, workers) -> int:
+    """Refuse bad --grasp options by name (ValueError: exit code 2 on the command line); the workers to use."""
     from fem.validation import check_integer
 
     if grasp_trials is not None:
         check_integer("grasp_trials", grasp_trials, 1, 1000)
-    check_integer("workers", workers, 1, 256)
-    if (grasp_trials is not None or grasp_only) and not grasp:
-        raise ValueError("--grasp-trials and --grasp-only need --grasp")
+    if workers is not None:
+        check_integer("workers", workers, 1, 256)
+    given = [flag for flag, value in (("--grasp-trials", grasp_trials), ("--workers", workers))
+             if value is not None] + (["--grasp-only"] if grasp_only else [])
+    if given and not grasp:
+        raise ValueError(f"{' and '.join(given)} need{'s' if len(given) == 1 else ''} --grasp")
+    return 2 if workers is None else workers
 
 
 def sensor_model(sensor: str, pitch: float):
@@ -104,10 +108,10 @@ def evaluate(cop_shift: np.ndarray, shifts, design_gain: float | None = None) ->
 
 
 def run(out_dir, quick: bool = False, grasp: bool = False, grasp_trials: int | None = None,
-        grasp_only: bool = False, workers: int = 2) -> dict:
+        grasp_only: bool = False, workers: int | None = None) -> dict:
     """One FEM run per array, read by every sensor model at both pitches; CSV, PNG, PDF and the verdict; with
     ``grasp`` the arrays' closed-loop panel too (module docstring)."""
-    check_grasp_options(grasp, grasp_trials, grasp_only, workers)
+    workers = check_grasp_options(grasp, grasp_trials, grasp_only, workers)
     out_dir = Path(out_dir)
     arrays = (1, 3) if quick else (1, 2, 3, 4)
     summary, rows = ({"verdict": []}, []) if grasp_only else _bench(out_dir, quick, arrays)

@@ -211,6 +211,8 @@ def run(out_dir, quick: bool = False, full: bool = False) -> dict:
     from studies._finite_strain_compare import envelope, envelope_bounds, press_rows, shear_rows, twist_rows
     from studies._finite_strain_plot import plot
 
+    if quick and full:
+        raise ValueError("--quick and --full exclude each other: choose one")
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     if ccx_executable() is None:

@@ -38,7 +38,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--trials", type=int, default=None,
                         help=f"trials per object and cell (default {TRIALS}, --full {FULL_TRIALS}, quick 1)")
     parser.add_argument("--full", action="store_true", help="levels 0, +-5 ... +-20 %% and 30 trials per cell")
-    parser.add_argument("--processes", type=int, default=None, help="worker processes (default: every CPU)")
+    parser.add_argument("--processes", type=int, default=None, help="worker processes, 1 to 256 (default: every CPU)")
     add_swing_argument(parser)
 
 
@@ -71,6 +71,8 @@ def run(out_dir, quick: bool = False, trials: int | None = None, full: bool = Fa
     """Every cell's trials (resumable), the per-cell summary and the figure."""
     from controller.closed_loop import HELD_OUT_SEED, TABLE_I_OBJECTS
 
+    if quick and full:
+        raise ValueError("--quick and --full exclude each other: choose one")
     out_dir = Path(out_dir)
     trials = (1 if quick else FULL_TRIALS if full else TRIALS) if trials is None else trials
     check_trials(trials)

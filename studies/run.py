@@ -105,6 +105,30 @@ def check_writable(out_dir: Path) -> Path:
     return out_dir
 
 
+def check_out_folder(out_dir: Path) -> None:
+    """Refuse an --out that cannot become a writable folder, leaving nothing behind: a file, a path under a file, a
+    place where no folder can be made (NotADirectoryError / PermissionError naming --out). The command line's check
+    before any study starts; ``check_writable`` then makes the folder."""
+    out_dir = Path(out_dir)
+    name, existing, problem = f"--out {str(out_dir)!r}", None, None
+    try:
+        if out_dir.is_symlink() and not out_dir.exists():
+            problem = f"{name} is a link to nothing, not a folder"
+        elif out_dir.exists() and not out_dir.is_dir():
+            problem = f"{name} is a file, not a folder"
+        else:
+            existing = out_dir if out_dir.exists() else next(p for p in out_dir.absolute().parents if p.exists())
+            if not existing.is_dir():
+                problem = f"{name} lies under {str(existing)!r}, a file, not a folder"
+            else:
+                os.rmdir(tempfile.mkdtemp(dir=existing, prefix=".write-test-"))
+    except OSError as error:                        # a folder on the way that cannot be read, or written
+        where = f" (no folder can be made in {str(existing)!r})" if existing not in (None, out_dir) else ""
+        raise PermissionError(f"{name} is not writable{where}: {error.strerror or error}") from None
+    if problem:
+        raise NotADirectoryError(problem)
+
+
 def prepare_out_dir(out_dir: Path) -> Path:
     """``check_writable``, then remove an earlier run's outputs, so that none survives this run."""
     out_dir = check_writable(out_dir)

@@ -40,7 +40,7 @@ def add_arguments(parser) -> None:
     parser.add_argument("--trials", type=int, default=None, help=f"trials per object (default {TRIALS}, quick 3)")
     parser.add_argument("--seed", type=int, default=None, help="seed of the randomisation (default: the held-out "
                                                                   "seed, HELD_OUT_SEED)")
-    parser.add_argument("--processes", type=int, default=None, help="worker processes (default: every CPU)")
+    parser.add_argument("--processes", type=int, default=None, help="worker processes, 1 to 256 (default: every CPU)")
     parser.add_argument("--objects", type=lambda text: [name for name in text.split(",") if name], default=None,
                         metavar="NAME,NAME", help="only these objects (bottle_upright, bottle_horizontal, eclair)")
     add_plant_arguments(parser)
@@ -64,6 +64,7 @@ def run(out_dir, quick: bool = False, trials: int | None = None, seed: int | Non
         plant: str | None = None, sensor_plane: str = "fem", swing_margin: float = 0.0) -> dict:
     """Run the trials of every Table I object (or of ``objects``); CSV, summary JSON and figure."""
     from controller.closed_loop import CREEP_WINDOW, HELD_OUT_SEED, TABLE_I_OBJECTS
+    from fem.validation import check_integer
 
     out_dir = Path(out_dir)
     trials = (3 if quick else TRIALS) if trials is None else trials
@@ -72,6 +73,8 @@ def run(out_dir, quick: bool = False, trials: int | None = None, seed: int | Non
     if unknown or objects == []:
         raise ValueError(f"objects={objects!r}: unknown {unknown}; allowed: {list(TABLE_I_OBJECTS)}")
     options = plant_options(plant_spread, plant, sensor_plane, swing_margin)
+    if seed is not None:
+        check_integer("--seed", seed, 0, 2**63 - 1)
     rng = np.random.default_rng(HELD_OUT_SEED if seed is None else seed)
     jobs = []
     for name, obj in TABLE_I_OBJECTS.items():

@@ -78,7 +78,7 @@ def add_arguments(parser) -> None:
                         metavar="NAME,NAME", help=f"only these sets ({', '.join(s.name for s in SETS)})")
     parser.add_argument("--trials", type=int, default=None,
                         help="the first N trials of each set, at most the set's own (default: all; quick 2)")
-    parser.add_argument("--processes", type=int, default=None, help="worker processes (default: every CPU)")
+    parser.add_argument("--processes", type=int, default=None, help="worker processes, 1 to 256 (default: every CPU)")
     add_swing_argument(parser)
     parser.add_argument("--sensor-noise-scale", type=float, default=1.0, metavar="S",
                         help=f"every trial's node noise times S, the draws unchanged (default 1: the protocol's "

@@ -67,7 +67,8 @@ DESIGN_FILES = [
     ({"study": "fast"}, r"\[study\] must be a table, got str 'fast'"),
     ({"base": {"rows": 2.0}}, r"rows=2.0 is not an integer \(allowed: 1 to 12\)"),
     ({"base": {"sensor_pitch": "3"}}, r"sensor_pitch='3' \(a string\) is not a number"),
-    ({"grid": {"youngs_modulus": [0.3, "soft"]}}, r"design \{'youngs_modulus': 'soft'\} \[base\]: youngs_modulus='soft'"),
+    ({"grid": {"youngs_modulus": [0.3, "soft"]}},
+     r"design \{'youngs_modulus': 'soft'\} \[base\]: youngs_modulus='soft'"),
     ({"grid": {"rows": [[2, 3]]}}, r"rows=\(2, 3\) \(a list\) is not an integer"),
     ({"name": ""}, r"name='' must be a non-empty string"),
 ]
@@ -177,8 +178,8 @@ def _api_cases():
 
     one = [FingertipDesign()]
     return [
-        (lambda: design_sweep(FingertipDesign()), TypeError, r"designs=FingertipDesign\(.*must be a list of "
-                                                             r"FingertipDesign objects \(one design: pass \[design\]\)"),
+        (lambda: design_sweep(FingertipDesign()), TypeError,
+         r"designs=FingertipDesign\(.*must be a list of FingertipDesign objects \(one design: pass \[design\]\)"),
         (lambda: design_sweep("designs.toml"), TypeError, r"designs='designs.toml' must be a list"),
         (lambda: design_sweep([FingertipDesign(), "x"]), TypeError, r"designs\[1\]='x' is a str, not a "
                                                                      r"FingertipDesign"),
@@ -282,3 +283,61 @@ def test_sweep_past_the_resource_limits_is_refused_before_any_solve(tmp_path, ca
     path = write_toml(tmp_path / "sweep.toml", {"scene": str(HCM1), "outputs": ["wall_time"], "grid": grid})
     code, output = _cli(["sweep", str(path), "--out", str(tmp_path / "out"), "--workers", "2", *flags], capsys)
     _refused(code, output, message)
+
+
+# --- any study's command line: refused by name before any work (an adversarial probe found these taken or raw) -----
+
+COMMAND_LINES = [
+    (["fig2b", "--quick", "--out", "{file}"], r"--out '.*a-file' is a file, not a folder"),
+    (["fig2b", "--quick", "--out", "{file}/sub"], r"--out '.*sub' lies under '.*a-file', a file, not a folder"),
+    (["torsion-theory", "--quick", "--out", "{out}"], r"--out '.*out' is not writable \(no folder can be made in"),
+    (["table1", "--quick", "--seed", "-1", "--out", "{out}"],
+     r"--seed=-1 outside allowed range \[0, 9223372036854775807\]"),
+    (["table1", "--quick", "--trials", "1000000000", "--out", "{out}"],
+     r"trials=1000000000 must be an integer in \[1, 1000\]"),
+    (["robustness", "--quick", "--full", "--out", "{out}"], r"--quick and --full exclude each other"),
+    (["finite-strain", "--quick", "--full", "--out", "{out}"], r"--quick and --full exclude each other"),
+    (["closed-loop-benchmark", "--quick", "--repeats", "0", "--out", "{out}"],
+     r"--repeats=0 outside allowed range \[1, 1000\]"),
+    (["closed-loop-benchmark", "--trials", "1001", "--out", "{out}"],
+     r"--trials=1001 outside allowed range \[2, 1000\]"),
+    (["fig6", "--quick", "--workers", "3", "--out", "{out}"], r"fig6: error: --workers needs --grasp"),
+    (["fig6", "--quick", "--grasp-trials", "5", "--grasp-only", "--out", "{out}"],
+     r"--grasp-trials and --grasp-only need --grasp"),
+    (["benchmark", "--quick", "--repeats", "1001", "--out", "{out}"],
+     r"--repeats=1001 outside allowed range \[1, 1000\]"),
+]
+
+
+@pytest.mark.parametrize("args, message", COMMAND_LINES, ids=[" ".join(args[:2]) + f" {i}"
+                                                             for i, (args, _) in enumerate(COMMAND_LINES)])
+def test_a_study_refuses_a_bad_command_line_by_name(tmp_path, capsys, monkeypatch, args, message):
+    import studies.run
+
+    if args[0] == "torsion-theory":         # a place where no folder can be made (root may write anywhere)
+        def refuse(*args, **kwargs):
+            raise PermissionError(13, "Permission denied")
+
+        monkeypatch.setattr(studies.run.tempfile, "mkdtemp", refuse)
+    (tmp_path / "a-file").write_text("not a folder")
+    names = {"file": str(tmp_path / "a-file"), "out": str(tmp_path / "out")}
+    code, output = _cli([arg.format(**names) for arg in args], capsys)
+    _refused(code, output, message)
+    assert not (tmp_path / "out").exists()              # refused before anything was written
+
+
+@pytest.mark.parametrize("args, message", [
+    (["fig2b", "--quick", "--out", ""], r"argument --out: '' is empty: give a folder"),
+    (["all", "--only", ""], r"argument --only: '' names no study"),
+    (["all", "--only", ","], r"argument --only: ',' names no study"),
+], ids=["empty out", "empty only", "comma only"])
+def test_an_empty_folder_or_list_is_refused_not_taken_as_a_default(tmp_path, capsys, monkeypatch, args, message):
+    # an empty --out wrote into the current folder; an empty --only ran nothing and reported success
+    from studies.__main__ import main
+
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as exit_:
+        main(args)
+    error = capsys.readouterr().err
+    assert exit_.value.code == 2 and re.search(message, error) and "Traceback" not in error
+    assert not any(tmp_path.iterdir())

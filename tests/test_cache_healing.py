@@ -4,6 +4,9 @@ warning naming the variable, and the run goes on without a cache."""
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 import warnings
 
 import numpy as np
@@ -251,3 +254,17 @@ def test_a_study_stamp_of_another_shape_means_run_again(tmp_path, stamp):
     (tmp_path / "fig2b.summary.json").write_text("[1, 2]")
     assert not all_studies.is_up_to_date(tmp_path, "fig2b", find_studies()["fig2b"], quick=True)
     assert all_studies.read_summary(tmp_path, "fig2b") == {}
+
+
+def test_a_cache_warning_raised_while_the_studies_are_imported_is_one_line(tmp_path):
+    # the cache folder is probed as the studies are imported, which came before the command line set its one-line
+    # warning format: Python's own 'file:line: CacheWarning: ...' with the source line under it came out
+    target = tmp_path / "cache-file"
+    target.write_text("")
+    done = subprocess.run([sys.executable, "-m", "studies", "fig2b", "--quick", "--out", str(tmp_path / "out")],
+                          env={**os.environ, "FINGERTIP_CACHE": str(target)}, capture_output=True, text=True,
+                          timeout=600)
+    mentions = [line for line in done.stderr.splitlines() if "FINGERTIP_CACHE" in line]
+    assert done.returncode == 0, done.stderr
+    assert len(mentions) == 1 and mentions[0].startswith(f"warning: FINGERTIP_CACHE={str(target)!r}"), done.stderr
+    assert "CacheWarning" not in done.stderr

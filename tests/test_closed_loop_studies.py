@@ -94,12 +94,13 @@ def test_fig10_quick_counts_outcomes_apart(tmp_path):
     assert math.isfinite(summary["series"]["eclair_with_rotation"]["hold_force_settled"])
 
 
-@pytest.mark.parametrize("trials", [0, 1.5, True])
+@pytest.mark.parametrize("trials", [0, 1.5, True, 1001, 10**9])
 def test_closed_loop_studies_refuse_bad_trial_counts(tmp_path, trials):
+    # 10**9 used to be taken: table1 built a billion jobs before anything else was checked
     from studies import fig10, fig11, robustness, table1, tuning
 
     for study in (table1, fig10, fig11, robustness, tuning):
-        with pytest.raises(ValueError, match=f"trials={trials!r} must be an integer >= 1"):
+        with pytest.raises(ValueError, match=rf"trials={trials!r} must be an integer in \[1, 1000\]"):
             study.run(tmp_path, quick=True, trials=trials)
 
 
@@ -110,11 +111,22 @@ def test_table1_refuses_an_unknown_object(tmp_path):
         table1.run(tmp_path, quick=True, objects=["eclair", "teapot"])
 
 
-def test_batch_refuses_a_bad_process_count():
+@pytest.mark.parametrize("processes", [0, 257, 2.0])
+def test_batch_refuses_a_bad_process_count(processes):
     from controller.closed_loop import run_trials
 
-    with pytest.raises(ValueError, match="processes=0 must be an integer >= 1"):
-        list(run_trials([(LIGHT_BOX, TrialSettings())], processes=0))
+    with pytest.raises(ValueError, match=rf"processes={processes!r} must be an integer in \[1, 256\]"):
+        list(run_trials([(LIGHT_BOX, TrialSettings())], processes=processes))
+
+
+@pytest.mark.parametrize("setting", ["0", "-2", "257", "two"])
+def test_a_bad_process_count_in_the_environment_is_refused_not_clamped(monkeypatch, setting):
+    # FINGERTIP_PROCESSES=0 used to be taken as 1
+    from controller.closed_loop import default_processes
+
+    monkeypatch.setenv("FINGERTIP_PROCESSES", setting)
+    with pytest.raises(ValueError, match=rf"FINGERTIP_PROCESSES='{setting}' must be an integer in \[1, 256\]"):
+        default_processes()
 
 
 def test_robustness_quick_counts_cells_and_friction_bands(tmp_path, monkeypatch):
@@ -229,6 +241,15 @@ def test_the_swing_margin_option_reaches_the_trials_and_bad_ones_are_refused_by_
             tuning.jobs(["eclair"], trials=1, swing_margin=bad)
         with pytest.raises(ValueError, match=refused):
             plant_options(swing_margin=bad)
+
+
+def test_a_fixed_plant_and_a_spread_together_are_refused():
+    # the spread was ignored without a word when both were given
+    from studies._trials import plant_options
+
+    with pytest.raises(ValueError, match=r"--plant='couple_arm=0.1' fixes .* --plant-spread=0.05 draws them: give one"):
+        plant_options(plant_spread=0.05, plant="couple_arm=0.1")
+    assert plant_options(plant="couple_arm=0.1")["plant"].nonzero() == {"couple_arm": 0.1}
 
 
 def test_tuning_runs_a_chosen_set_resumes_and_refuses_unknown_ones(tmp_path, monkeypatch):

@@ -1,6 +1,7 @@
 """Fingertip design sweeps: the design file's checks, the metrics against independent computations, resume, dask."""
 
 import dataclasses
+import math
 
 import numpy as np
 import pandas as pd
@@ -20,6 +21,11 @@ ARRAY = FingertipDesign()                                                      #
     ({"study": {"grasp": 2.0}}, r"unknown key\(s\) \['grasp'\] in \[study\]"),
     ({"study": {"load_ratios": [0.2, 0.5]}}, r"load_ratios=\[0.2, 0.5\] must hold at least 3"),
     ({"study": {"load_ratios": [0.2, 0.5, 1.0]}}, "load_ratios=.* must stay below 1"),
+    # NaN and inf passed as numbers before; the run then failed writing design.json, naming no key
+    ({"study": {"load_ratios": [0.2, 0.4, math.nan]}}, r"load_ratios=\[0.2, 0.4, nan\] must hold finite numbers"),
+    ({"study": {"twist_fractions": [0.25, math.inf]}}, r"twist_fractions=\[0.25, inf\] must hold finite numbers"),
+    ({"study": {"twist_fractions": [0.5, 1e300]}}, r"twist_fractions=.* must stay at or below 10.0"),
+    ({"base": {"youngs_modulus": 1e300}}, r"youngs_modulus=1e\+300 outside allowed range \(0.0, 1000.0\] MPa"),
     ({"study": {"sensor": "optical"}}, "sensor='optical' is not one of"),
     ({"study": {"noise_draws": 1.5}}, r"noise_draws=1.5 is not an integer"),
     ({"base": {"bump_size": 3.0}}, r"unknown key\(s\) \['bump_size'\] in \[base\]"),

@@ -80,6 +80,18 @@ def test_plant_factors_refuse_bad_values_by_name():
         PlantFactors.parse("stiffness=0.1")
     assert PlantFactors.parse("kernel_width=0.1, youngs_modulus=-0.2").nonzero() == {
         "kernel_width": 0.1, "youngs_modulus": -0.2}
+    # a factor given twice (the last one won) and an empty list (the nominal plant, silently) were taken before
+    with pytest.raises(ValueError, match="plant factor couple_arm is given twice"):
+        PlantFactors.parse("couple_arm=0.1,couple_arm=0.2")
+    for empty in ("", " , "):
+        with pytest.raises(ValueError, match=r"expected name=value\[,name=value ...\]"):
+            PlantFactors.parse(empty)
+
+
+def test_a_spread_of_minus_zero_draws_the_nominal_plant():
+    # -0.0 passes the range check; numpy's uniform refused [0, -0.0] with a message naming no parameter
+    rng = np.random.default_rng(1)
+    assert PlantFactors.random(rng, -0.0).nonzero() == {}
 
 
 def test_stiffer_gel_and_taller_bumps_scale_the_bump_laws_as_the_table_says():

@@ -261,7 +261,8 @@ def test_packaged_calibration_is_the_default_design_fitted_on_fem():
 # the largest per-bump, per-axis difference over the increment's largest shift): depth 4.0 %, mean bump radius
 # 2.7 %, base spread 1.7 %, CoP shift in the cells 7.1 %, through the sensor 9.1 %. Measured here: 3.3 %, 2.9 %,
 # 7.5 %, 3.3 %, 6.3 %. The closed-form model misses the CoP shifts by ~75 %: the test tells the two apart.
-MESH_VARIATION = {"depth": 0.040, "contact_radius": 0.027, "base_spread": 0.017, "cop_cells": 0.071, "cop_sensor": 0.091}
+MESH_VARIATION = {"depth": 0.040, "contact_radius": 0.027, "base_spread": 0.017, "cop_cells": 0.071,
+                  "cop_sensor": 0.091}
 
 
 @pytest.fixture(scope="module")
@@ -338,6 +339,43 @@ def test_stored_samples_of_another_plan_are_refused(tmp_path):
     path = tmp_path / "empty.npz"
     np.savez(path, mesh=np.array("{}"))
     with pytest.raises(ValueError, match=r"no FEM samples for cases \['other', 'press'\]"):
+        load_samples(path, scenes)
+
+
+@pytest.mark.parametrize("kind", ["empty", "truncated", "text", "one array", "pickled", "member missing",
+                                  "pickled member"])
+def test_a_damaged_samples_file_is_refused_by_name(tmp_path, kind):
+    # each of these raised EOFError, BadZipFile, TypeError or KeyError (a traceback on the command line) before
+    from studies.reduced_calibration import StudyPlan, build_scenes, load_samples
+
+    scenes = dict(zip(("press",), build_scenes(StudyPlan.default(quick=True))[0].values()))
+    path = tmp_path / "samples.npz"
+    if kind == "empty":
+        path.write_bytes(b"")
+    elif kind == "truncated":
+        np.savez(path, mesh=np.array("{}"), **{"press/friction": np.array(0.5)})
+        path.write_bytes(path.read_bytes()[:40])
+    elif kind == "text":
+        path.write_text("friction = 0.5\n")
+    elif kind == "one array":
+        with open(path, "wb") as stream:
+            np.save(stream, np.zeros(3))
+    elif kind == "pickled":
+        with open(path, "wb") as stream:
+            np.save(stream, np.array([{"a": 1}], dtype=object), allow_pickle=True)
+    elif kind == "member missing":
+        np.savez(path, mesh=np.array("{}"), **{"press/friction": np.array(0.5)})
+    else:                                           # every member there, one of them an object array
+        from dataclasses import fields
+
+        from contact.reduced import PathSamples
+
+        names = ["force_targets", "friction", "provenance", "sensor_cop"] + [
+            f.name for f in fields(PathSamples) if f.name not in ("case", "friction", "provenance")]
+        members = {f"press/{name}": np.zeros(3) for name in names}
+        members["press/sensor_cop"] = np.array([{"a": 1}], dtype=object)
+        np.savez(path, mesh=np.array("{}"), **members)
+    with pytest.raises(ValueError, match=r"samples='.*samples.npz' is not a reduced_calibration_samples.npz"):
         load_samples(path, scenes)
 
 

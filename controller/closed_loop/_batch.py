@@ -13,22 +13,28 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 
 from ._trial import GraspObject, TrialResult, TrialSettings
 
-__all__ = ["run_trials", "map_trials", "default_processes"]
+__all__ = ["run_trials", "map_trials", "default_processes", "MAX_PROCESSES"]
+
+MAX_PROCESSES = 256             # worker processes of one batch (fig6's --workers has the same bound)
 
 
 def default_processes() -> int:
     """Worker processes for a batch: ``FINGERTIP_PROCESSES`` if set (``studies all`` shares the CPUs out that way),
-    else the CPUs this process may use (``os.sched_getaffinity``); at least 1."""
+    else the CPUs this process may use (``os.sched_getaffinity``), 1 to MAX_PROCESSES."""
     setting = os.environ.get("FINGERTIP_PROCESSES")
     if setting:
         try:
-            return max(int(setting), 1)
+            processes = int(setting)
         except ValueError:
-            raise ValueError(f"FINGERTIP_PROCESSES={setting!r} must be an integer >= 1") from None
+            processes = 0
+        if not 1 <= processes <= MAX_PROCESSES:
+            raise ValueError(f"FINGERTIP_PROCESSES={setting!r} must be an integer in [1, {MAX_PROCESSES}]")
+        return processes
     try:
-        return max(len(os.sched_getaffinity(0)), 1)
+        cpus = len(os.sched_getaffinity(0))
     except AttributeError:                                                  # not on Linux
-        return max(os.cpu_count() or 1, 1)
+        cpus = os.cpu_count() or 1
+    return min(max(cpus, 1), MAX_PROCESSES)
 
 
 def _warm() -> None:
@@ -57,8 +63,8 @@ def map_trials(function: Callable, jobs: Iterable[tuple], processes: int | None 
     if not jobs:
         return
     processes = default_processes() if processes is None else processes
-    if isinstance(processes, bool) or not isinstance(processes, int) or processes < 1:
-        raise ValueError(f"processes={processes!r} must be an integer >= 1")
+    if isinstance(processes, bool) or not isinstance(processes, int) or not 1 <= processes <= MAX_PROCESSES:
+        raise ValueError(f"processes={processes!r} must be an integer in [1, {MAX_PROCESSES}]")
     bar = tqdm(total=len(jobs), desc=progress, unit="job", disable=progress is None, leave=False)
     try:
         if processes == 1 or len(jobs) == 1:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
+import math
 from dataclasses import dataclass
 from enum import Enum
 
@@ -13,6 +14,11 @@ import numpy as np
 from fem.validation import check_integer, check_number, check_positive, check_range
 
 __all__ = ["SensorModel", "FingertipDesign", "DesignStudy", "design_id", "fem_key", "twist_angles", "design_scenes"]
+
+MAX_YOUNGS_MODULUS = 1000.0     # MPa: a stiff rubber; the stability study's stiffest gel (past it a gel is not soft)
+# a twist's angle in units of the outer bumps' Mindlin slip twist: at 10 those bumps have slid by several contact
+# radii, outside the small-sliding contact model
+MAX_TWIST_FRACTION = 10.0
 
 
 class SensorModel(str, Enum):
@@ -56,7 +62,7 @@ class FingertipDesign:
                 check_integer(field.name, value, 1, 12)
             else:
                 object.__setattr__(self, field.name, check_number(field.name, value))
-        check_positive("youngs_modulus", self.youngs_modulus, "MPa")
+        check_range("youngs_modulus", self.youngs_modulus, 0.0, MAX_YOUNGS_MODULUS, "MPa", low_open=True)
         check_range("poissons_ratio", self.poissons_ratio, -1.0, 0.5, low_open=True, high_open=True)
         check_positive("sensor_pitch", self.sensor_pitch, "mm")
         check_range("pad_fill", self.pad_fill, 0.0, 1.0, low_open=True)
@@ -157,11 +163,16 @@ class DesignStudy:
             if isinstance(values, (str, bytes)) or not hasattr(values, "__len__"):
                 raise ValueError(f"{name}={values!r} must be a list of numbers")
             values = tuple(check_number(f"{name}[{k}]", v) for k, v in enumerate(values))
+            if not all(math.isfinite(value) for value in values):
+                raise ValueError(f"{name}={list(values)} must hold finite numbers")
             if len(values) < low or any(b <= a for a, b in zip(values, values[1:])) or values[0] <= 0.0:
                 raise ValueError(f"{name}={list(values)} must hold at least {low} increasing values > 0")
             object.__setattr__(self, name, values)
         if self.load_ratios[-1] >= 1.0:
             raise ValueError(f"load_ratios={list(self.load_ratios)} must stay below 1 (gross slip)")
+        if self.twist_fractions[-1] > MAX_TWIST_FRACTION:
+            raise ValueError(f"twist_fractions={list(self.twist_fractions)} must stay at or below "
+                             f"{MAX_TWIST_FRACTION} (the outer bumps would slide by several contact radii)")
         try:
             object.__setattr__(self, "sensor", SensorModel(self.sensor))
         except ValueError:

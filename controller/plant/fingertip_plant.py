@@ -94,7 +94,8 @@ class PlantFactors:
     @classmethod
     def random(cls, rng, spread: float, names=None) -> "PlantFactors":
         """Each factor of ``names`` (default all) uniform in [-spread, spread] ([0, spread] for node_gain)."""
-        check_range("plant spread", spread, 0.0, FACTOR_LIMIT)
+        # abs: -0.0 passes the range check, and numpy's uniform refuses the interval [0, -0.0]
+        spread = abs(check_range("plant spread", spread, 0.0, FACTOR_LIMIT))
         chosen = cls.names() if names is None else tuple(names)
         unknown = sorted(set(chosen) - set(cls.names()))
         if unknown:
@@ -107,11 +108,16 @@ class PlantFactors:
         """From 'name=value,name=value' (the command line), each value a relative error; ValueError names the
         item that is wrong."""
         values = {}
+        if not any(part.strip() for part in str(text).split(",")):
+            raise ValueError(f"plant factors {text!r}: expected name=value[,name=value ...] with names of "
+                             f"{list(cls.names())} (the nominal plant: --plant-spread 0)")
         for item in filter(None, (part.strip() for part in str(text).split(","))):
             name, equals, value = item.partition("=")
             name = name.strip()
             if not equals or name not in cls.names():
                 raise ValueError(f"plant factor {item!r}: expected name=value with a name of {list(cls.names())}")
+            if name in values:
+                raise ValueError(f"plant factor {name} is given twice ({text!r}): give each factor once")
             try:
                 values[name] = float(value)
             except ValueError:
