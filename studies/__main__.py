@@ -27,7 +27,7 @@ def _first_line(module) -> str:
 
 
 def _out_folder(text: str) -> Path:
-    """--out's value: a folder path, not empty (an empty one was taken as the current folder)."""
+    """--out's value: a folder path, not empty (pathlib reads '' as the current folder)."""
     if not text.strip():
         raise argparse.ArgumentTypeError(f"{text!r} is empty: give a folder")
     return Path(text)

@@ -66,6 +66,7 @@ def run(out_dir, quick: bool = False, repeats: int | None = None, trials: int | 
 
     # --quick sets the defaults; a count given explicitly is kept
     repeats = check_integer("--repeats", (1 if quick else 3) if repeats is None else repeats, 1, 1000)
+    # at least one trial for each of the throughput test's 2 processes
     trials = check_integer("--trials", (4 if quick else 8) if trials is None else trials, 2, 1000)
     out_dir = Path(out_dir)
     names = ["eclair"] if quick else list(TABLE_I_OBJECTS)
