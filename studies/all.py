@@ -276,13 +276,9 @@ def _run_parallel(tasks, jobs: int) -> dict:
     """Each task in a fresh 'spawn' worker process (no forked solver threads), BLAS threads shared out by jobs."""
     import multiprocessing
 
-    from controller.closed_loop._batch import MAX_PROCESSES
+    from controller.closed_loop._batch import MAX_PROCESSES, available_cpus
 
-    try:
-        cpus = len(os.sched_getaffinity(0))         # the CPUs this process may use, not the host's
-    except AttributeError:                          # not on Linux
-        cpus = os.cpu_count() or 1
-    threads = max(1, cpus // jobs)
+    threads = max(1, available_cpus() // jobs)
     records = {}
     pool = ProcessPoolExecutor(max_workers=min(jobs, len(tasks)), mp_context=multiprocessing.get_context("spawn"),
                                initializer=_limit_threads, initargs=(threads, min(threads, MAX_PROCESSES)))

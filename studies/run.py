@@ -92,8 +92,7 @@ def write_outputs(result, out_dir: Path, vtu: bool = False) -> None:
 def check_writable(out_dir: Path) -> Path:
     """Create ``out_dir`` and check that a file can be written there (before any solve), else PermissionError."""
     out_dir = Path(out_dir)
-    if out_dir.exists() and not out_dir.is_dir():
-        raise NotADirectoryError(f"--out {str(out_dir)!r} is a file, not a folder")
+    check_out_folder(out_dir)
     try:
         out_dir.mkdir(parents=True, exist_ok=True)
         handle, probe = tempfile.mkstemp(dir=out_dir, prefix=".write-test-", suffix=".tmp")

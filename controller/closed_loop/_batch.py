@@ -13,9 +13,17 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 
 from ._trial import GraspObject, TrialResult, TrialSettings
 
-__all__ = ["run_trials", "map_trials", "default_processes", "MAX_PROCESSES"]
+__all__ = ["run_trials", "map_trials", "default_processes", "available_cpus", "MAX_PROCESSES"]
 
 MAX_PROCESSES = 256             # worker processes of one batch (fig6's --workers has the same bound)
+
+
+def available_cpus() -> int:
+    """The CPUs this process may use (``os.sched_getaffinity``; elsewhere ``os.cpu_count``), at least 1."""
+    try:
+        return max(len(os.sched_getaffinity(0)), 1)
+    except AttributeError:                                                  # not on Linux
+        return max(os.cpu_count() or 1, 1)
 
 
 def default_processes() -> int:
@@ -30,11 +38,7 @@ def default_processes() -> int:
         if not 1 <= processes <= MAX_PROCESSES:
             raise ValueError(f"FINGERTIP_PROCESSES={setting!r} must be an integer in [1, {MAX_PROCESSES}]")
         return processes
-    try:
-        cpus = len(os.sched_getaffinity(0))
-    except AttributeError:                                                  # not on Linux
-        cpus = os.cpu_count() or 1
-    return min(max(cpus, 1), MAX_PROCESSES)
+    return min(available_cpus(), MAX_PROCESSES)
 
 
 def _warm() -> None:
