@@ -14,7 +14,7 @@ import numpy as np
 from fem.compiled import njit_cached
 
 __all__ = ["array_margin", "fingertip_need", "slip_signature", "low_pass_frame", "carried_wrench", "trend_spread",
-           "dominant_component"]
+           "dominant_component", "tip_normal_force"]
 
 # a held grasp's carried load still moves with its grip: the estimator's own error (its kernel and arm are not the
 # plant's) and the bumps' own elasticity, whose tangential stiffness follows the grip, make it fall by about 0.25-0.6
@@ -99,19 +99,26 @@ def _utilisation(centres, force, ratio, contact, finger, rotational, slip_centre
 @njit_cached
 def fingertip_need(centres, force, ratio, contact, rotational, slip_centre, full_search, warm_step):
     """The demand of the module docstring per unit grip: nu = 1 / lambda*(mu = 1) [-] of the more used fingertip,
-    so that the grip F / (s lambda*(mu_hat)) = F nu / (s mu_hat) holds the array at s of its limit, and that
-    fingertip's sensed normal force sum P [N] (the F of the readings). ``slip_centre`` (2, 2) [mm] holds each
-    fingertip's last slip centre (inf: none): a full search when ``full_search`` or none, else a warm start near
-    it."""
-    largest, sensed = 0.0, 0.0
+    so that the grip F / (s lambda*(mu_hat)) = F nu / (s mu_hat) holds the array at s of its limit, that
+    fingertip's sensed normal force sum P [N] (the F of the readings) and its index (-1: neither is used).
+    ``slip_centre`` (2, 2) [mm] holds each fingertip's last slip centre (inf: none): a full search when
+    ``full_search`` or none, else a warm start near it."""
+    largest, sensed, used = 0.0, 0.0, -1
     for f in range(2):
         value = _utilisation(centres, force, ratio, contact, f, rotational, slip_centre, full_search, warm_step)
         if value > largest:
-            largest = value
-            sensed = 0.0
-            for i in range(centres.shape[0]):
-                sensed += force[f, i] if contact[f, i] else 0.0
-    return largest, sensed
+            largest, used = value, f
+            sensed = tip_normal_force(force, contact, f)
+    return largest, sensed, used
+
+
+@njit_cached
+def tip_normal_force(force, contact, tip):
+    """Fingertip ``tip``'s sensed normal force [N]: its bump forces (2, k) [N] summed over the bumps in contact."""
+    total = 0.0
+    for i in range(force.shape[1]):
+        total += force[tip, i] if contact[tip, i] else 0.0
+    return total
 
 
 @njit_cached

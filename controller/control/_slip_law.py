@@ -16,8 +16,8 @@ import numpy as np
 from fem.compiled import njit_cached
 
 from ._lift_test import (LIFT_UNTRIED, LIFT_STEPPED, LIFT_DONE, LIFT_ASKED, _load_follows_grip, _lift_test)
-from ._slip_kernels import (dominant_component, fingertip_need, low_pass_frame, slip_signature, trend_spread,
-                            watched)
+from ._slip_kernels import (dominant_component, fingertip_need, low_pass_frame, slip_signature, tip_normal_force,
+                            trend_spread, watched)
 from ._slip_state import (APPROACH, ARRAY_SLIP, AT_MINIMUM, BUMP_SLIP, FAST, FAST_PREVIOUS, GROSS_SLIP, HOLD, LIFT,
                           MINIMUM_FRICTION, NO_SLIP, PLACE, P_APPROACH_FORCE, P_CONFIRM_FRAMES, P_FAST_GAIN,
                           P_FORCE_DROP, P_FORCE_SHARE, P_FULL_SEARCH_EVERY, P_GROSS_FRAMES, P_LIFT_SAFETY,
@@ -30,8 +30,8 @@ from ._slip_state import (APPROACH, ARRAY_SLIP, AT_MINIMUM, BUMP_SLIP, FAST, FAS
                           X_LIFT_SIZED, X_LIFT_TEST, X_LIFT_USE, X_MINIMUM, X_NEED, X_PHASE, X_PLACE_FORCE, X_PROBED,
                           X_PROBE_BEGUN, X_PROBING, X_RELEASE_FORCE, X_RELEASE_NEED, X_RELEASING, X_SENSED,
                           X_SENSED_MEAN, X_SENSED_SLOW, X_SLIDING, X_SLID_GRIP, X_SLID_HELD, X_SLID_USE, X_SLIP_SEEN,
-                          X_STARTED, X_TIME, X_USE_SLOW, X_VISIBLE, X_WATCHING, _ema, _first_max, _first_min,
-                          _force_scale)
+                          X_STARTED, X_TIME, X_TIP_MEAN_0, X_TIP_SLOW_0, X_USE_SLOW, X_VISIBLE, X_WATCHING, _ema,
+                          _first_max, _first_min, _force_scale, _tip_grip)
 
 __all__ = ["observe_frame", "control_step"]
 
@@ -91,8 +91,8 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
                    ratios[SLOW_PREVIOUS], signals[SLOW], ratios[SLOW], restart)
     scalars[X_FRAMES] += 1.0
     full = int(scalars[X_FRAMES]) % int(parameters[P_FULL_SEARCH_EVERY]) == 0
-    use, sensed = fingertip_need(centres, signals[FAST], ratios[FAST], contact, parameters[P_ROTATIONAL] > 0.0,
-                                 slip_centre, full, parameters[P_WARM_STEP])
+    use, sensed, used = fingertip_need(centres, signals[FAST], ratios[FAST], contact, parameters[P_ROTATIONAL] > 0.0,
+                                       slip_centre, full, parameters[P_WARM_STEP])
     scalars[X_NEED], scalars[X_SENSED] = use, sensed
     # the grip of these readings: the sensed force in the force loop's scale (the estimator's scale error, read off
     # the command against the sensed force over a second; a lag of the grip behind its command averages out)
@@ -101,8 +101,20 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
         scalars[X_SENSED_MEAN] = _ema(scalars[X_SENSED_MEAN], sensed, parameters[P_SCALE_GAIN])
     scalars[X_USE_SLOW] = _ema(scalars[X_USE_SLOW], use, parameters[P_SLOW_GAIN])
     scalars[X_SENSED_SLOW] = _ema(scalars[X_SENSED_SLOW], sensed, parameters[P_SLOW_GAIN])
+    # each fingertip's sensed force over a second and slowly filtered: both carry one grip, but each reads it with
+    # its own error (up to 1.7x apart on a curved object), so the grip is read off the more used one in its own scale;
+    # one scale for both jumped when the more used fingertip changed and the grip sank while the object slid
+    # (docs/design.md sec. 12)
+    for f in range(2):
+        tip = tip_normal_force(signals[FAST], contact, f)
+        if tip > 0.0:
+            scalars[X_TIP_MEAN_0 + f] = _ema(scalars[X_TIP_MEAN_0 + f], tip, parameters[P_SCALE_GAIN])
+            scalars[X_TIP_SLOW_0 + f] = _ema(scalars[X_TIP_SLOW_0 + f], tip, parameters[P_SLOW_GAIN])
     # the slowly filtered grip: a fast one would feed the object's own swing in the fingers back into the demand
-    scalars[X_GRIP] = scalars[X_SENSED_SLOW] * _force_scale(scalars)
+    if used >= 0 and scalars[X_TIP_MEAN_0 + used] > 0.0:
+        scalars[X_GRIP] = _tip_grip(scalars, used)
+    else:
+        scalars[X_GRIP] = scalars[X_SENSED_SLOW] * _force_scale(scalars)
     if scalars[X_WATCHING] == 0.0:
         return NO_SLIP
     # the slip watch (module docstring of incipient_slip: per-bump ratios against their forces, the total load)

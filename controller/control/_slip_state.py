@@ -19,7 +19,8 @@ APPROACH, GRASP, LIFT, HOLD, PLACE, RELEASE = (PHASE_CODES[phase] for phase in G
  X_PROBE_BEGUN, X_CARRY_TIME, X_RELEASING, X_RELEASE_NEED, X_RELEASE_FORCE, X_FRAMES, X_HISTORY, X_PHASE, X_GRIP,
  X_CARRY_SLIP, X_SENSED, X_COMMAND_MEAN, X_SENSED_MEAN, X_USE_SLOW, X_SENSED_SLOW, X_PROBED, X_LIFT_TEST,
  X_LIFT_FRAMES, X_LIFT_USE, X_LIFT_GRIP, X_LIFT_HOLD, X_LIFT_HELD, X_SLID_USE, X_SLID_GRIP, X_SLIDING,
- X_SLID_HELD, X_PLACE_FORCE, X_VISIBLE, X_LIFT_STEP, X_LIFT_UNJUDGED, X_LIFT_SIZED, X_SIZE) = range(42)
+ X_SLID_HELD, X_PLACE_FORCE, X_VISIBLE, X_LIFT_STEP, X_LIFT_UNJUDGED, X_LIFT_SIZED, X_TIP_MEAN_0, X_TIP_MEAN_1,
+ X_TIP_SLOW_0, X_TIP_SLOW_1, X_SIZE) = range(46)
 # --- parameter slots --------------------------------------------------------------------------------------------
 (P_PERIOD, P_FAST_GAIN, P_SLOW_GAIN, P_APPROACH_FORCE, P_RAMP_RATE, P_MAXIMUM_FORCE, P_LOOP_RATE,
  P_RELEASE_LOOP_RATE, P_SAFETY, P_LIFT_SAFETY, P_PRIOR_FRICTION, P_MAXIMUM_FRICTION, P_PROBE_RATE, P_PROBE_DELAY,
@@ -55,6 +56,15 @@ def _force_scale(scalars):
     estimator's scale error; a lag of the grip behind its command averages out), within 0.5-2."""
     scale = scalars[X_COMMAND_MEAN] / scalars[X_SENSED_MEAN] if scalars[X_SENSED_MEAN] > 0.0 else 1.0
     return _first_min(_first_max(scale, 0.5), 2.0)
+
+
+@njit_cached(inline="always")
+def _tip_grip(scalars, tip):
+    """The grip [N] read off fingertip ``tip`` alone: its slowly filtered sensed normal force in the force loop's
+    scale, by its own scale factor (the command against its sensed force over a second), within 0.5-2."""
+    mean = scalars[X_TIP_MEAN_0 + tip]
+    scale = scalars[X_COMMAND_MEAN] / mean if mean > 0.0 else 1.0
+    return scalars[X_TIP_SLOW_0 + tip] * _first_min(_first_max(scale, 0.5), 2.0)
 
 
 @njit_cached(inline="always")

@@ -14,7 +14,10 @@ it, the load does not), so the grip that leaves the margin 1 / s is
 
     F_need = F / (s lambda*(mu_hat)),
 
-on the more loaded fingertip. Without rotational detection only the translational part is used,
+on the more loaded fingertip, F that fingertip's sensed normal force in the force loop's scale by its own factor
+(the command over its sensed force over ``SCALE_TIME``): both fingertips carry one grip, but each estimator reads it
+with its own error, and a factor shared by the two jumped when the more loaded fingertip changed (docs/design.md sec.
+12). Without rotational detection only the translational part is used,
 F_need = |F_t| / (s mu_hat): blind to the moment. The command tracks F_need with rate lambda (faster upwards),
 never below the minimum contact force F_min.
 
