@@ -768,8 +768,8 @@ def test_the_visible_bumps_are_those_whose_noise_margin_lies_below_the_probes_ga
 
 class TwoScalePlant(QuasiStaticPlant):
     """The quasi-static array read through two fingertips whose estimators read the normal force with different
-    gains (``gains``: each its own plant and contact; the load ratios exact), the more used fingertip changing at
-    ``switch`` [s]: its load ratios read 2 % above the other's, first on fingertip 1, then on fingertip 0."""
+    gains (``gains``: each its own plant and contact), the more used fingertip changing at ``switch`` [s]: its load
+    ratios read 2 % high (the other's exact), first on fingertip 1, then on fingertip 0."""
 
     def __init__(self, tangential, torque, friction, gains, switch):
         super().__init__(tangential, torque, friction)
@@ -791,7 +791,9 @@ def test_the_grip_is_read_in_the_more_used_fingertips_own_scale():
     whichever fingertip was more used, the read grip halved when the more used one changed from the fingertip that
     reads 1.2x to the one that reads 0.6x, and the demand sank with it: the grip fell to 0.60x in 0.4 s (measured; on
     that bottle at mu 0.27 the grip sank while it slid 36 mm along the fingers, and it dropped). Each fingertip in its
-    own scale, the read grip carries on across the change: the command stays within 1 % until the probe starts."""
+    own scale, the read grip carries on across the change: the command stays within 1 % until the probe starts. (Either
+    fingertip in its own scale reads this plant's grip: the test asks for continuity across the change, not for which
+    one is read.)"""
     plant = TwoScalePlant((0.0, 2.0), 0.0, 0.5, (0.6, 1.2), switch=0.6)
     controller, log = _lift(plant, 3.0, 120)
     grips = np.array([grip for _, grip, _ in log])

@@ -94,8 +94,9 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
     use, sensed, used = fingertip_need(centres, signals[FAST], ratios[FAST], contact, parameters[P_ROTATIONAL] > 0.0,
                                        slip_centre, full, parameters[P_WARM_STEP])
     scalars[X_NEED], scalars[X_SENSED] = use, sensed
-    # the grip of these readings: the sensed force in the force loop's scale (the estimator's scale error, read off
-    # the command against the sensed force over a second; a lag of the grip behind its command averages out)
+    # the scale both fingertips share: the command against the more used fingertip's sensed force over a second (the
+    # estimator's scale error; a lag of the grip behind its command averages out). The lift test reads the command in
+    # it, and the grip falls back to it while no fingertip is used
     if sensed > 0.0:
         scalars[X_COMMAND_MEAN] = _ema(scalars[X_COMMAND_MEAN], scalars[X_COMMAND], parameters[P_SCALE_GAIN])
         scalars[X_SENSED_MEAN] = _ema(scalars[X_SENSED_MEAN], sensed, parameters[P_SCALE_GAIN])

@@ -61,7 +61,8 @@ def _force_scale(scalars):
 @njit_cached(inline="always")
 def _tip_grip(scalars, tip):
     """The grip [N] read off fingertip ``tip`` alone: its slowly filtered sensed normal force in the force loop's
-    scale, by its own scale factor (the command against its sensed force over a second), within 0.5-2."""
+    scale, by its own scale factor (the command's mean over a second against this fingertip's sensed force's; the
+    latter averaged over the frames it touches, from its first), within 0.5-2."""
     mean = scalars[X_TIP_MEAN_0 + tip]
     scale = scalars[X_COMMAND_MEAN] / mean if mean > 0.0 else 1.0
     return scalars[X_TIP_SLOW_0 + tip] * _first_min(_first_max(scale, 0.5), 2.0)

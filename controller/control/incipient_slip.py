@@ -14,10 +14,10 @@ it, the load does not), so the grip that leaves the margin 1 / s is
 
     F_need = F / (s lambda*(mu_hat)),
 
-on the more loaded fingertip, F that fingertip's sensed normal force in the force loop's scale by its own factor
-(the command over its sensed force over ``SCALE_TIME``): both fingertips carry one grip, but each estimator reads it
-with its own error, and a factor shared by the two jumped when the more loaded fingertip changed (docs/design.md sec.
-12). Without rotational detection only the translational part is used,
+on the more used fingertip (the larger nu = 1 / lambda*(1)), F that fingertip's sensed normal force in the force
+loop's scale by its own factor (the command over its sensed force, each averaged over ``SCALE_TIME``): both fingertips
+carry one grip, but each estimator reads it with its own error, and a factor shared by the two jumped when the more
+used fingertip changed (docs/design.md sec. 12). Without rotational detection only the translational part is used,
 F_need = |F_t| / (s mu_hat): blind to the moment. The command tracks F_need with rate lambda (faster upwards),
 never below the minimum contact force F_min.
 
@@ -238,7 +238,7 @@ class IncipientSlipController:
     A thin wrapper: the state lives in a few arrays (``arrays()``) and the law is the compiled kernels of
     ``_slip_law`` (``observe_frame``, ``control_step``), which the closed loop's fused frame loop calls on the same
     arrays. Read-outs: ``command`` [N], ``minimum_force`` [N] (None until two contacts), ``friction_estimate``
-    mu_hat [-], ``probing`` / ``slip_seen``, ``need`` [N] (F / lambda*(mu = 1) of the more loaded fingertip: the
+    mu_hat [-], ``probing`` / ``slip_seen``, ``need`` [N] (F / lambda*(mu = 1) of the more used fingertip: the
     grip at which it would slide at mu = 1), ``time`` [s] and ``slip_events`` ((time [s], mu_hat, kind) per
     detection; kind 'bump', 'gross' or 'array').
 
