@@ -1,18 +1,19 @@
 """The tuning draws (seed 101): the trial sets the incipient-slip law's changes are judged on.
 
 Every set draws from a generator of its own, ``default_rng(TUNING_SEED + offset)`` (``TuningSet.offset``), so a change
-of one set leaves the others' draws as they were; none is the held-out seed's. The last four sets reuse offsets 0-3 with
-other objects and frictions (they were drawn that way when docs/design.md sec. 12 measured them; a new set takes an
-offset from 11 on). Each trial is a randomised trial of the protocol (``random_settings``: friction uniform in the set's
-range, grasp jitter, misalignment, sensor noise, every plant factor within +-10 %); Table I's objects run the whole
-sequence, the Fig. 11 boxes lift and hold 4 s. `python -m studies tuning` gives the numbers sec. 12 judges the law and
-its rejected changes by, for the law in this checkout. Not part of ``studies all``: it is the tuning's measure, not a
-paper figure. Per set: held / turned out / dropped / crushed, the held rate's 95 % Wilson interval, the trials whose
-friction was never measured (no slip seen), the settled grip over the trial's own slip limit, the largest turn of a held
-object, the friction estimate's error. ``--sensor-noise-scale S`` runs the same draws with every array's node noise
-times S (the law reads its noise from a rest calibration, so it follows): where the sensor, not the law, sets a limit
-(docs/design.md sec. 12); ``--swing-margin M`` runs them with the law's swing margin (an option, off by default).
-Outputs: tuning.csv (one row per trial, resumable), tuning_summary.csv (one row per set), tuning.png/pdf.
+of one set leaves the others' draws as they were; none is the held-out seed's. The four sets of low-friction boxes reuse
+offsets 0-3 with other objects and frictions (they were drawn that way when docs/design.md sec. 12 measured them; the
+horizontal bottles below the prior took 11; a new set takes an offset from 12 on). Each trial is a randomised trial of
+the protocol (``random_settings``: friction uniform in the set's range, grasp jitter, misalignment, sensor noise, every
+plant factor within +-10 %); Table I's objects run the whole sequence, the Fig. 11 boxes lift and hold 4 s. `python -m
+studies tuning` gives the numbers sec. 12 judges the law and its rejected changes by, for the law in this checkout. Not
+part of ``studies all``: it is the tuning's measure, not a paper figure. Per set: held / turned out / dropped / crushed,
+the held rate's 95 % Wilson interval, the trials whose friction was never measured (no slip seen), the settled grip over
+the trial's own slip limit, the largest turn of a held object, the friction estimate's error. ``--sensor-noise-scale S``
+runs the same draws with every array's node noise times S (the law reads its noise from a rest calibration, so it
+follows): where the sensor, not the law, sets a limit (docs/design.md sec. 12); ``--swing-margin M`` runs them with the
+law's swing margin (an option, off by default). Outputs: tuning.csv (one row per trial, resumable), tuning_summary.csv
+(one row per set), tuning.png/pdf.
 """
 
 from __future__ import annotations
