@@ -54,10 +54,12 @@ def add_arguments(parser) -> None:
 def check_grasp_options(grasp: bool, grasp_trials, grasp_only: bool, workers) -> int:
     """Refuse bad --grasp options by name (ValueError: exit code 2 on the command line); the workers to use."""
     from fem.validation import check_integer
+    from studies._trials import MAX_TRIALS
 
     if grasp_trials is not None:
-        check_integer("grasp_trials", grasp_trials, 1, 1000)
+        check_integer("grasp_trials", grasp_trials, 1, MAX_TRIALS)
     if workers is not None:
+        # the closed loop's MAX_PROCESSES, not imported: controller.closed_loop loads numba, which a bench run skips
         check_integer("workers", workers, 1, 256)
     given = [flag for flag, value in (("--grasp-trials", grasp_trials), ("--workers", workers))
              if value is not None] + (["--grasp-only"] if grasp_only else [])

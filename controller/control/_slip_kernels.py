@@ -99,17 +99,16 @@ def _utilisation(centres, force, ratio, contact, finger, rotational, slip_centre
 @njit_cached
 def fingertip_need(centres, force, ratio, contact, rotational, slip_centre, full_search, warm_step):
     """The demand of the module docstring per unit grip: nu = 1 / lambda*(mu = 1) [-] of the more used fingertip,
-    so that the grip F / (s lambda*(mu_hat)) = F nu / (s mu_hat) holds the array at s of its limit, that
-    fingertip's sensed normal force sum P [N] (the F of the readings) and its index (-1: neither is used).
-    ``slip_centre`` (2, 2) [mm] holds each fingertip's last slip centre (inf: none): a full search when
-    ``full_search`` or none, else a warm start near it."""
-    largest, sensed, used = 0.0, 0.0, -1
+    so that the grip F / (s lambda*(mu_hat)) = F nu / (s mu_hat) holds the array at s of its limit, and that
+    fingertip's index (-1: neither is used; its ``tip_normal_force`` is the F of the readings). ``slip_centre``
+    (2, 2) [mm] holds each fingertip's last slip centre (inf: none): a full search when ``full_search`` or none, else
+    a warm start near it."""
+    largest, used = 0.0, -1
     for f in range(2):
         value = _utilisation(centres, force, ratio, contact, f, rotational, slip_centre, full_search, warm_step)
         if value > largest:
             largest, used = value, f
-            sensed = tip_normal_force(force, contact, f)
-    return largest, sensed, used
+    return largest, used
 
 
 @njit_cached

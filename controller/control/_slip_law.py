@@ -91,8 +91,11 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
                    ratios[SLOW_PREVIOUS], signals[SLOW], ratios[SLOW], restart)
     scalars[X_FRAMES] += 1.0
     full = int(scalars[X_FRAMES]) % int(parameters[P_FULL_SEARCH_EVERY]) == 0
-    use, sensed, used = fingertip_need(centres, signals[FAST], ratios[FAST], contact, parameters[P_ROTATIONAL] > 0.0,
-                                       slip_centre, full, parameters[P_WARM_STEP])
+    use, used = fingertip_need(centres, signals[FAST], ratios[FAST], contact, parameters[P_ROTATIONAL] > 0.0,
+                               slip_centre, full, parameters[P_WARM_STEP])
+    # each fingertip's sensed normal force; the more used one's is the F of the readings
+    tips = (tip_normal_force(signals[FAST], contact, 0), tip_normal_force(signals[FAST], contact, 1))
+    sensed = tips[used] if used >= 0 else 0.0
     scalars[X_NEED], scalars[X_SENSED] = use, sensed
     # the scale both fingertips share: the command against the more used fingertip's sensed force over a second (the
     # estimator's scale error; a lag of the grip behind its command averages out). The lift test reads the command in
@@ -107,10 +110,9 @@ def observe_frame(bump_force, load_ratio, in_contact, ratio_noise, parameters, c
     # one scale for both jumped when the more used fingertip changed and the grip sank while the object slid
     # (docs/design.md sec. 12)
     for f in range(2):
-        tip = tip_normal_force(signals[FAST], contact, f)
-        if tip > 0.0:
-            scalars[X_TIP_MEAN_0 + f] = _ema(scalars[X_TIP_MEAN_0 + f], tip, parameters[P_SCALE_GAIN])
-            scalars[X_TIP_SLOW_0 + f] = _ema(scalars[X_TIP_SLOW_0 + f], tip, parameters[P_SLOW_GAIN])
+        if tips[f] > 0.0:
+            scalars[X_TIP_MEAN_0 + f] = _ema(scalars[X_TIP_MEAN_0 + f], tips[f], parameters[P_SCALE_GAIN])
+            scalars[X_TIP_SLOW_0 + f] = _ema(scalars[X_TIP_SLOW_0 + f], tips[f], parameters[P_SLOW_GAIN])
     # the slowly filtered grip: a fast one would feed the object's own swing in the fingers back into the demand
     if used >= 0 and scalars[X_TIP_MEAN_0 + used] > 0.0:
         scalars[X_GRIP] = _tip_grip(scalars, used)
