@@ -44,6 +44,29 @@ BACKTRACKS = 4  # halvings of a Newton step that raises the residual
 AUGMENTATION_SCALE = 0.1
 
 
+@dataclass(frozen=True)
+class _Points:
+    """The candidate points of one increment, fixed over its Newton iterations."""
+
+    rows: np.ndarray                  # (n, 3) free-vector rows of each point's dofs, -1 where held
+    held_y: np.ndarray                # (n,) u_y held by a symmetry plane: t_y = 0 there
+    lever: np.ndarray                 # (n, 2) [mm] lever arms about the body's axis
+    r: np.ndarray                     # (n,) Alart-Curnier parameters [N/mm]
+    mu: float                         # friction coefficient [-]
+    frictional: bool
+
+
+@dataclass(frozen=True)
+class _Body:
+    """Which body coordinates are unknowns (force-controlled) in one increment, and the control that sets them."""
+
+    control: BodyControl
+    depth_free: bool
+    shift_free: bool
+    angle_free: bool
+    shift_components: np.ndarray      # the shift's components that are unknowns (x only with a mirror plane)
+
+
 @dataclass
 class FiniteStrainGel:
     """A meshed gel with the Neo-Hookean law, and the counts of its Newton work over a path."""
@@ -95,6 +118,8 @@ def solve_finite_strain_increment(gel: FiniteStrainGel, candidates: np.ndarray, 
     shift_free = frictional and control.shift is None
     angle_free = frictional and control.angle is None
     shift_components = np.array([0] if mirror_y else [0, 1])
+    points = _Points(point_rows, held_y, lever, r, mu, frictional)
+    body = _Body(control, depth_free, shift_free, angle_free, shift_components)
     depth = previous.depth if depth_free else float(control.depth)
     if depth_free and seed_depth is not None and not np.any(previous.normal_force > 0):
         depth = seed_depth
@@ -165,9 +190,7 @@ def solve_finite_strain_increment(gel: FiniteStrainGel, candidates: np.ndarray, 
             raise ContactNotConverged("the body does not touch the gel (no point has a closed gap); increase the "
                                       "depth or the normal force", history)
         gel.iterations += 1
-        step = _newton_step(gel.tangent(current["gradient"]), current["equilibrium"], contact, lam, tan, lam_hat, trial,
-                            current["gap"], current["slip"], r, mu, lever, point_rows, held_y, frictional, depth_free,
-                            shift_free, angle_free, shift_components, control)
+        step = _newton_step(gel.tangent(current["gradient"]), current, contact, points, body)
         target_lam, target_tan = np.zeros(n), np.zeros((n, 2))       # open points' forces go to zero
         target_lam[contact] = lam[contact] + step["lam"]
         if frictional:
@@ -205,12 +228,19 @@ def _spread(values: np.ndarray, components: np.ndarray) -> np.ndarray:
     return out
 
 
-def _newton_step(tangent, equilibrium, contact, lam, tan, lam_hat, trial, gap, slip, r, mu, lever, point_rows,
-                 held_y, frictional, depth_free, shift_free, angle_free, shift_components, control) -> dict:
-    """One Newton correction: assemble the sparse system over (du, the contact points' (t, lambda), body) and solve.
+def _newton_step(tangent: sp.coo_matrix, iterate: dict, contact: np.ndarray, points: _Points, body: _Body) -> dict:
+    """One Newton correction from ``iterate`` (what ``evaluate`` returned): assemble the sparse system over (du, the
+    contact points' (t, lambda), body) and solve. ``contact``: the points in contact.
 
     Open points' forces are set to zero outright (their equations are lambda = 0, t = 0), so their load leaves the
     equilibrium residual here."""
+    lam, tan = iterate["state"][1:3]
+    equilibrium, gap, slip = iterate["equilibrium"], iterate["gap"], iterate["slip"]
+    lam_hat, trial = iterate["lam_hat"], iterate["trial"]
+    point_rows, held_y, lever, r, mu, frictional = (points.rows, points.held_y, points.lever, points.r, points.mu,
+                                                    points.frictional)
+    control, depth_free, shift_free, angle_free = body.control, body.depth_free, body.shift_free, body.angle_free
+    shift_components = body.shift_components
     n_free = tangent.shape[0]
     m = contact.size
     n_comp = 3 if frictional else 1
