@@ -21,6 +21,7 @@ from collections.abc import Callable
 from dataclasses import asdict
 from pathlib import Path
 
+from fem.validation import check_integer
 from studies._output import write_csv_atomic
 
 
@@ -46,10 +47,8 @@ MAX_TRIALS = 1000             # per object or case: fig6's and the design file's
 
 
 def check_trials(trials) -> int:
-    """``trials`` per object or case must be an integer in [1, MAX_TRIALS] (not a bool)."""
-    if isinstance(trials, bool) or not isinstance(trials, int) or not 1 <= trials <= MAX_TRIALS:
-        raise ValueError(f"trials={trials!r} must be an integer in [1, {MAX_TRIALS}]")
-    return trials
+    """``trials`` per object or case: an integer in [1, MAX_TRIALS] (not a bool)."""
+    return check_integer("trials", trials, 1, MAX_TRIALS)
 
 
 def trial_key(obj, settings, extra: str = "") -> str:

@@ -294,7 +294,7 @@ COMMAND_LINES = [
     (["table1", "--quick", "--seed", "-1", "--out", "{out}"],
      r"--seed=-1 outside allowed range \[0, 9223372036854775807\]"),
     (["table1", "--quick", "--trials", "1000000000", "--out", "{out}"],
-     r"trials=1000000000 must be an integer in \[1, 1000\]"),
+     r"trials=1000000000 outside allowed range \[1, 1000\]"),
     (["robustness", "--quick", "--full", "--out", "{out}"], r"--quick and --full exclude each other"),
     (["finite-strain", "--quick", "--full", "--out", "{out}"], r"--quick and --full exclude each other"),
     (["closed-loop-benchmark", "--quick", "--repeats", "0", "--out", "{out}"],

@@ -215,7 +215,10 @@ def test_parameters_round_trip_through_json():
 @pytest.mark.parametrize("field, value, match", [
     ("pitch", 5.0, "pitch=5.0 outside"),
     ("poissons_ratio", 0.5, "poissons_ratio=0.5 outside"),
-    ("rows", 0, "rows=0 must be an integer"),
+    ("rows", 0, r"rows=0 outside allowed range \[1, 12\]"),
+    # a bool and a whole float used to pass (int(True) == True, int(3.0) == 3.0) and be kept as they came
+    ("rows", True, r"rows=True \(a bool\) is not an integer"),
+    ("cols", 3.0, r"cols=3.0 is not an integer \(allowed: 1 to 12\)"),
 ])
 def test_invalid_design_raises(field, value, match):
     with pytest.raises(ValueError, match=match):

@@ -47,7 +47,7 @@ from dataclasses import asdict, dataclass, fields
 
 import numpy as np
 
-from fem.validation import check_positive, check_range
+from fem.validation import check_integer, check_positive, check_range
 
 __all__ = ["ArrayFingertipDesign", "ReducedParameters"]
 
@@ -89,9 +89,7 @@ class ArrayFingertipDesign:
 
     def __post_init__(self):
         for name in ("rows", "cols"):
-            value = getattr(self, name)
-            if int(value) != value or not 1 <= value <= 12:
-                raise ValueError(f"{name}={value!r} must be an integer in [1, 12]")
+            check_integer(name, getattr(self, name), 1, 12)
         check_positive("bump_radius", self.bump_radius, "mm")
         check_range("pitch", self.pitch, 2.0 * self.bump_radius, math.inf, "mm (pitch > 2 bump_radius)", True, True)
         check_positive("base_thickness", self.base_thickness, "mm")

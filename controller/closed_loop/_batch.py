@@ -11,6 +11,8 @@ import os
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import ProcessPoolExecutor, as_completed
 
+from fem.validation import check_integer
+
 from ._trial import GraspObject, TrialResult, TrialSettings
 
 __all__ = ["run_trials", "map_trials", "default_processes", "available_cpus", "MAX_PROCESSES"]
@@ -67,8 +69,7 @@ def map_trials(function: Callable, jobs: Iterable[tuple], processes: int | None 
     if not jobs:
         return
     processes = default_processes() if processes is None else processes
-    if isinstance(processes, bool) or not isinstance(processes, int) or not 1 <= processes <= MAX_PROCESSES:
-        raise ValueError(f"processes={processes!r} must be an integer in [1, {MAX_PROCESSES}]")
+    processes = check_integer("processes", processes, 1, MAX_PROCESSES)
     bar = tqdm(total=len(jobs), desc=progress, unit="job", disable=progress is None, leave=False)
     try:
         if processes == 1 or len(jobs) == 1:
