@@ -131,7 +131,8 @@ def _with_required_force(function: Callable, obj, settings) -> tuple:
     from controller.plant import plant_mechanics
 
     return function(obj, settings), required_grip_force(obj, settings.friction_coefficient,
-                                                        plant_mechanics(settings.plant))
+                                                        plant_mechanics(settings.plant),
+                                                        settings.plant.friction_anisotropy)
 
 
 def coerce(row: dict) -> dict:
@@ -243,7 +244,7 @@ def outcome_columns(result, required: float, crush_force: float) -> dict:
     columns = dict(outcome=result.outcome, success=result.success, dropped=result.dropped, crushed=result.crushed,
                    rotated=result.rotated, feasible=bool(required < crush_force),
                    hold_slip_mm=result.hold_slip_mm, hold_rotation_mrad=result.hold_rotation_mrad,
-                   max_rotation_mrad=result.max_rotation_mrad,
+                   grasp_slip_mm=result.grasp_slip_mm, max_rotation_mrad=result.max_rotation_mrad,
                    creep_after_friction_um_per_s=result.creep_after_friction_um_per_s,
                    creep_window_s=result.creep_window_s, creep_measurable=result.creep_measurable,
                    friction_estimate=result.friction_estimate,

@@ -125,6 +125,7 @@ def summarise(rows) -> list[dict]:
                             friction_error_max=float(np.nanmax(np.abs(error))) if np.isfinite(error).any()
                             else math.nan,
                             slide_max_mm=float(max(row["hold_slip_mm"] for row in held)) if held else math.nan,
+                            grasp_slide_max_mm=float(max(row["grasp_slip_mm"] for row in held)) if held else math.nan,
                             rotation_max_mrad=float(max(row["max_rotation_mrad"] for row in held)) if held
                             else math.nan))
     return out

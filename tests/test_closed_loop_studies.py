@@ -26,6 +26,20 @@ def test_minimum_force_comes_from_a_bracket_seen_to_fail_and_hold():
     assert found.force == pytest.approx(required_grip_force(LIGHT_BOX, 0.6), rel=0.05)
 
 
+def test_the_slip_limit_of_an_anisotropic_plant_is_the_plants():
+    # the plant's friction mu (1 - e) along the sensor's y, where the weight hangs: the studies' slip limit (the
+    # grip ratio, feasibility) takes e, checked against the constant-grip search on that plant - the search is the
+    # plant's dynamics, the limit the reduced model's support function. e = 0.2 raises it 1.25x, which the
+    # search's 5 % (as above) tells apart
+    from controller.plant import PlantFactors
+
+    settings = TrialSettings(friction_coefficient=0.6, plant=PlantFactors(friction_anisotropy=0.2))
+    found = minimum_grip_force(LIGHT_BOX, settings, resolution=0.02)
+    required = required_grip_force(LIGHT_BOX, 0.6, anisotropy=0.2)
+    assert required == pytest.approx(1.25 * required_grip_force(LIGHT_BOX, 0.6), rel=1e-3)
+    assert found.force == pytest.approx(required, rel=0.05)
+
+
 def test_minimum_force_refuses_bad_input():
     with pytest.raises(ValueError, match="resolution=0.0 outside"):
         minimum_grip_force(LIGHT_BOX, TrialSettings(), resolution=0.0)

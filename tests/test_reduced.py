@@ -93,6 +93,21 @@ def test_minimum_normal_force_is_where_the_margin_crosses_one(tangential, torque
     assert margin(force) >= 1.0 > margin(force * (1.0 - 2 * tolerance))
 
 
+@pytest.mark.parametrize("anisotropy", [0.1, -0.2])
+def test_an_anisotropic_surface_carries_a_translation_at_the_friction_along_it(anisotropy):
+    # friction mu (1 + e) along x and mu (1 - e) along y (the plant's elliptic limit): a pure translation along an
+    # axis is the isotropic limit at that axis's friction, exactly (every bump slides along it; 1e-4 is the
+    # search's tolerance); a twist of the array slides its bumps every way, so its limit lies between the two
+    tolerance = 1e-4
+    along_y = TIP.minimum_normal_force((0.0, 0.5), 0.0, MU, tolerance=tolerance, anisotropy=anisotropy)
+    along_x = TIP.minimum_normal_force((0.5, 0.0), 0.0, MU, tolerance=tolerance, anisotropy=anisotropy)
+    assert along_y == pytest.approx(TIP.minimum_normal_force((0.0, 0.5), 0.0, MU * (1 - anisotropy)), rel=2e-4)
+    assert along_x == pytest.approx(TIP.minimum_normal_force((0.5, 0.0), 0.0, MU * (1 + anisotropy)), rel=2e-4)
+    twisted = TIP.minimum_normal_force((0.0, 0.0), 40.0, MU, anisotropy=anisotropy)
+    low, high = sorted(TIP.minimum_normal_force((0.0, 0.0), 40.0, MU * (1 + sign * anisotropy)) for sign in (1, -1))
+    assert low < twisted < high
+
+
 def test_base_pressure_carries_the_normal_force():
     state = TIP.load_state(P, (1.0, 0.5), 20.0, MU, tilt=(0.01, -0.005))
     grid = TIP.base_grid()

@@ -1,4 +1,4 @@
-"""Reduced contact model of one array fingertip: array state for a load or a rigid displacement, slip limit, base pressure.
+"""Reduced model of one array fingertip: array state for a load or a rigid displacement, slip limit, base pressure.
 
 The object is a rigid flat face. A rigid displacement of the object relative to the fingertip - translation t (2,)
 [mm] and rotation theta [rad] about the array centre, in the sensor plane - shears bump i at r_i by
@@ -16,7 +16,11 @@ and the load (F, T) is carried iff F.v + T omega <= h(xi) for every xi. The slip
 lambda* = min_xi h(xi) / (F.v + T omega) is the factor by which the load may grow before the contact slides
 (lambda* <= 1: gross slip). Translation alone gives mu P / |F| (gross slip at mu P); torque alone gives
 sum mu P_i |r_i| plus the bumps' own torsion; in between the torque the array can carry falls with the tangential
-load. The minimising twist tells the mode: its instantaneous centre |v| / |omega| inside the array (within the
+load. On an anisotropic surface (friction mu (1 + e) along the sensor's x and mu (1 - e) along y, the plant's
+``friction_anisotropy``) a bump's force set is that ellipse scaled by P_i, and mu |u| above becomes
+mu sqrt(((1 + e) u_x)^2 + ((1 - e) u_y)^2); the bumps' own spin limit keeps mu (the plant's spin limit takes the
+friction along each bump's shear, between the two; the bumps' torsion carries about 1 % of an array's torque). The
+minimising twist tells the mode: its instantaneous centre |v| / |omega| inside the array (within the
 farthest bump) is a rotational slip, outside it a translational slip.
 
 The base pressure that the sensor reads is ``_base``'s: per bump a mirrored Gaussian bell and the pressure
@@ -224,15 +228,17 @@ class ReducedFingertip:
             torque=torque, slip_margin=float(margin), gross_slip=gross, slip_mode=mode if gross else SlipMode.NONE)
 
     # --- slip limit ---------------------------------------------------------------------------------------
-    def support(self, bump_force, contact_radius, friction, twists) -> np.ndarray:
-        """Support function h(xi) (m,) [N mm/s] of the array's limit set for twists (m, 3) = (v_x, v_y, omega)."""
+    def support(self, bump_force, contact_radius, friction, twists, anisotropy: float = 0.0) -> np.ndarray:
+        """Support function h(xi) (m,) [N mm/s] of the array's limit set for twists (m, 3) = (v_x, v_y, omega);
+        ``anisotropy`` e: friction mu (1 + e) along the sensor's x, mu (1 - e) along y (module docstring)."""
         twists = np.asarray(twists, dtype=float)
         velocity = self.bump_shear(twists[:, :2], twists[:, 2])                      # (m, k, 2) bump slip velocity
+        velocity = velocity * np.array([1.0 + anisotropy, 1.0 - anisotropy])         # the ellipse's support
         limit = friction * np.asarray(bump_force)
         spin = LUBKIN_SLIP_TORQUE_RATIO * limit * np.asarray(contact_radius)
         return np.sqrt((limit * np.linalg.norm(velocity, axis=-1)) ** 2 + (spin * twists[:, 2:3]) ** 2).sum(axis=1)
 
-    def slip_margin(self, bump_force, contact_radius, friction, tangential_force, torque):
+    def slip_margin(self, bump_force, contact_radius, friction, tangential_force, torque, anisotropy: float = 0.0):
         """lambda* = min_xi h(xi) / (F.v + T omega) [-] and the slip mode of the minimising twist (module docstring).
 
         Coarse search over 4000 twist directions, refined by Nelder-Mead on the sphere (relative accuracy ~1e-6).
@@ -248,7 +254,8 @@ class ReducedFingertip:
         def ratio(twists):
             twists = np.atleast_2d(twists) * scale
             power = twists @ load
-            value = self.support(bump_force, contact_radius, friction, twists) / np.where(power > 0, power, 1.0)
+            value = (self.support(bump_force, contact_radius, friction, twists, anisotropy)
+                     / np.where(power > 0, power, 1.0))
             return np.where(power > 0, value, np.inf)
 
         coarse = ratio(self._directions)
@@ -266,14 +273,16 @@ class ReducedFingertip:
             return SlipMode.ROTATION
         return SlipMode.TRANSLATION
 
-    def minimum_normal_force(self, tangential_force, torque, friction, tilt=(0.0, 0.0), tolerance=1e-4) -> float:
-        """Least total normal force P [N] at which the load is carried (lambda* = 1), to a relative ``tolerance``."""
+    def minimum_normal_force(self, tangential_force, torque, friction, tilt=(0.0, 0.0), tolerance=1e-4,
+                             anisotropy: float = 0.0) -> float:
+        """Least total normal force P [N] at which the load is carried (lambda* = 1), to a relative ``tolerance``;
+        ``anisotropy`` as in ``support``."""
         from scipy.optimize import brentq
 
         def margin(force):
             bump_force = normal_split(force, self.centres, self.parameters, tilt)
             radius = self.parameters.radius_coefficient * np.cbrt(bump_force)
-            return self.slip_margin(bump_force, radius, friction, tangential_force, torque)[0]
+            return self.slip_margin(bump_force, radius, friction, tangential_force, torque, anisotropy)[0]
 
         def carried(force):
             return margin(force) > 1.0

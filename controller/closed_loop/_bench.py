@@ -193,12 +193,12 @@ def tared_chain(plant: FingertipPlant, plane: SensorPlane = SensorPlane.FEM, mod
 
 def belief_errors(plane: SensorPlane = SensorPlane.FEM, factors: PlantFactors = PlantFactors(), seed: int = 1,
                   model: PlantModel | None = None, array: SensorArray | None = None):
-    """The estimator's per-bump errors on held-out bench states of a build with ``factors`` (default: a nominal
-    build of other node draws than the bench's) of the design of ``model`` read by ``array`` (defaults: the
-    shipped 3x3 on the paper's array), the estimator fitted on that design's bench: {"force": largest
-    |P_hat / P - 1|, "ratio": largest
-    |rho_hat - Q / P| [-], "ratio_relative": largest |rho_hat - rho| / |rho| where |rho| > 0.1}. The plant's truth
-    is read here only to score the estimate (a study's question), never by the estimator."""
+    """The estimator's per-bump errors on held-out bench states of a build with ``factors`` (default: nominal; its
+    arrays the bench's own, build 0, on another day's noise, baselines and drift) of the design of ``model`` read by
+    ``array`` (defaults: the shipped 3x3 on the paper's array), the estimator fitted on that design's bench:
+    {"force": largest |P_hat / P - 1|, "ratio": largest |rho_hat - Q / P| [-], "ratio_relative": largest
+    |rho_hat - rho| / |rho| where |rho| > 0.1}. The plant's truth is read here only to score the estimate (a study's
+    question), never by the estimator."""
     from controller.plant.bench_rig import rig_states
 
     known = SensorPlane(plane) is SensorPlane.MODEL

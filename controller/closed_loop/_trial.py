@@ -208,9 +208,11 @@ class TrialResult:
     the crush force), ``rotated`` (beyond ROTATION_LIMIT in the grasp during lift and hold: it turned out of the
     grasp), ``outcome`` (one of OUTCOMES, the worst that happened: crushed, dropped, turned_out, else held) and
     ``success`` (held). Statistics: forces [N] per finger; the object's slide [mm] and rotation [mrad] in the
-    grasp over the hold (``hold_slip_mm``, ``hold_rotation_mrad``) and its largest rotation in the grasp during lift
-    and hold [mrad]; creep [um/s] and rotation creep [mrad/s] of the grasp point relative to the gripper after the
-    first 0.5 s of the hold, and creep after the controller found the friction (from 0.2 s after its last slip
+    grasp over the hold (``hold_slip_mm``, ``hold_rotation_mrad``), its largest slide in the grasp from the lift's
+    start over lift and hold (``grasp_slip_mm``: a slip caught in the lift, which the hold's measures start after;
+    the gel's elastic shear under the load, a few tenths of a mm, is in it) and its largest rotation in the grasp
+    during lift and hold [mrad]; creep [um/s] and rotation creep [mrad/s] of the grasp point relative to the gripper
+    after the first 0.5 s of the hold, and creep after the controller found the friction (from 0.2 s after its last slip
     event, or that 0.5 s, to the end of the hold: ``creep_after_friction_um_per_s``, fitted over ``creep_window_s``
     [s]; shorter than CREEP_WINDOW, it is the grip step's settling and the object's swing, not a creep:
     ``creep_measurable``).
@@ -235,6 +237,7 @@ class TrialResult:
     rotation_creep_mrad_per_s: float = math.nan
     hold_slip_mm: float = math.nan
     hold_rotation_mrad: float = math.nan
+    grasp_slip_mm: float = math.nan
     max_rotation_mrad: float = math.nan
     creep_after_friction_um_per_s: float = math.nan
     creep_window_s: float = math.nan
@@ -268,14 +271,17 @@ class TrialResult:
 
 
 
-def required_grip_force(obj: GraspObject, friction_coefficient: float, tip: ReducedFingertip | None = None) -> float:
+def required_grip_force(obj: GraspObject, friction_coefficient: float, tip: ReducedFingertip | None = None,
+                        anisotropy: float = 0.0) -> float:
     """Least normal force per finger [N] that carries the object (reduced model's slip limit, two fingers sharing
     the weight m g / 2 [N] and the moment m g lever / 2 [N mm] about the fingertip normal); ``tip``: the bump laws
-    (default the nominal build's; a trial's own are ``FingertipPlant.mechanics``)."""
+    (default the nominal build's; a trial's own are ``FingertipPlant.mechanics``); ``anisotropy``: the plant's
+    friction anisotropy e (``PlantFactors.friction_anisotropy``: the weight hangs along the sensor's y, where the
+    friction is mu (1 - e))."""
     tip = default_tip() if tip is None else tip
     weight_n = obj.mass * GRAVITY
     return tip.minimum_normal_force((0.0, 0.5 * weight_n), 0.5 * weight_n * obj.lever * MM_PER_M,
-                                    friction_coefficient)
+                                    friction_coefficient, anisotropy=anisotropy)
 
 
 

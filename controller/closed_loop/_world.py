@@ -285,6 +285,9 @@ class GraspWorld:
         result.max_force = float(force_peak)
         lifted = np.array([phase in (GraspPhase.LIFT, GraspPhase.HOLD) for phase in phases])
         result.max_rotation_mrad = 1e3 * float(np.abs(records[lifted, K.R_ROTATION]).max(initial=0.0))
+        if lifted.any():
+            relative = records[lifted, K.R_RELATIVE_X:K.R_RELATIVE_Z + 1]
+            result.grasp_slip_mm = float(np.linalg.norm(relative - relative[0], axis=1).max())
         result.crushed = force_peak > self.obj.crush_force
         result.minimum_force = float(self.grasp.minimum_force) if self.grasp.minimum_force is not None else math.nan
         result.friction_estimate = float(self.grasp.friction_estimate)

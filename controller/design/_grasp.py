@@ -168,7 +168,8 @@ def grasp_metrics(design, study, fitted) -> tuple[dict, dict]:
         plant = FingertipPlant(settings.plant, array, noise=settings.sensor_noise, seed=settings.seed,
                                plane=SensorPlane.FEM, model=model)
         result = run_trial(obj, settings, plant=plant)
-        required = required_grip_force(obj, settings.friction_coefficient, plant_mechanics(settings.plant, model))
+        required = required_grip_force(obj, settings.friction_coefficient, plant_mechanics(settings.plant, model),
+                                       settings.plant.friction_anisotropy)
         outcomes.append(result.outcome)
         feasible += int(required < obj.crush_force)
         if result.outcome == "held":
