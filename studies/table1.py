@@ -170,7 +170,7 @@ def _plot(rows, summary, plant: str):
     import matplotlib.pyplot as plt
 
     names = list(summary["objects"])
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.2))
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
     rates = np.array([summary["objects"][n]["success_rate"] for n in names])
     intervals = np.array([summary["objects"][n]["success_interval"] for n in names])
     axes[0].bar(range(len(names)), rates, color="#3182bd")
@@ -190,15 +190,25 @@ def _plot(rows, summary, plant: str):
         jitter = np.linspace(-0.2, 0.2, len(mine)) if len(mine) > 1 else np.zeros(1)
         marker = ["o" if r["outcome"] == "held" else "x" for r in mine]
         for index, row in enumerate(mine):
-            points = axes[1].scatter(i + jitter[index], row["force_ratio"], c=[row["friction_coefficient"]],
-                                     cmap="viridis", vmin=0.2, vmax=1.2, marker=marker[index], zorder=3)
+            colour = dict(c=[row["friction_coefficient"]], cmap="viridis", vmin=0.2, vmax=1.2, marker=marker[index],
+                          zorder=3)
+            points = axes[1].scatter(i + jitter[index], row["force_ratio"], **colour)
+            axes[2].scatter(i + jitter[index], row["grasp_slip_mm"], **colour)
     axes[1].axhline(1.0, color="k", linewidth=1, label="model's slip limit")
     axes[1].set_xticks(range(len(names)), [n.replace("_", "\n") for n in names])
     axes[1].set_ylabel("settled grip / slip limit [-]")
     axes[1].set_title("(b) grip the controller settled at, per trial (x: not held)", fontsize=10)
-    fig.colorbar(points, ax=axes[1], label="friction coefficient (unknown to the controller)")
     axes[1].legend(fontsize=8)
     axes[1].grid(alpha=0.3)
+    # the lift is where a held object slides: the hold's slide starts after it
+    axes[2].axhline(SLIDE_TARGET, color="k", linestyle=":", linewidth=1, label=f"{SLIDE_TARGET:g} mm")
+    axes[2].set_yscale("log")
+    axes[2].set_xticks(range(len(names)), [n.replace("_", "\n") for n in names])
+    axes[2].set_ylabel("slide from the lift's start [mm]")
+    axes[2].set_title("(c) slide in the grasp over lift and hold (elastic shear in it)", fontsize=10)
+    axes[2].legend(fontsize=8)
+    axes[2].grid(alpha=0.3, which="both")
+    fig.colorbar(points, ax=axes[2], label="friction coefficient (unknown to the controller)")
     fig.suptitle(f"Table I: closed-loop grasp with incipient-slip detection against an unknown plant ({plant})",
                  fontsize=10)
     fig.tight_layout()
