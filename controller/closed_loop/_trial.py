@@ -210,10 +210,11 @@ class TrialResult:
     ``success`` (held). Statistics: forces [N] per finger; the object's slide [mm] and rotation [mrad] in the
     grasp over the hold (``hold_slip_mm``, ``hold_rotation_mrad``), its largest slide in the grasp from the lift's
     start over lift and hold (``grasp_slip_mm``: a slip caught in the lift, which the hold's measures start after;
-    the gel's elastic shear under the load, a few tenths of a mm, is in it) and its largest rotation in the grasp
-    during lift and hold [mrad]; creep [um/s] and rotation creep [mrad/s] of the grasp point relative to the gripper
-    after the first 0.5 s of the hold, and creep after the controller found the friction (from 0.2 s after its last slip
-    event, or that 0.5 s, to the end of the hold: ``creep_after_friction_um_per_s``, fitted over ``creep_window_s``
+    the soft gel's elastic shear and the bumps' partial slip are in it, 0.1-0.5 mm for the light eclair and up to
+    about 2.6 mm for a heavy bottle held near its limit) and its largest rotation in the grasp during lift and hold
+    [mrad]; creep [um/s] and rotation creep [mrad/s] of the grasp point relative to the gripper after the first 0.5 s
+    of the hold, and creep after the controller found the friction (from 0.2 s after its last slip event, or that
+    0.5 s, to the end of the hold: ``creep_after_friction_um_per_s``, fitted over ``creep_window_s``
     [s]; shorter than CREEP_WINDOW, it is the grip step's settling and the object's swing, not a creep:
     ``creep_measurable``).
     ``hold_force_settled`` [N] is the mean grip over the last second of the hold (the force the controller settled
