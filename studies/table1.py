@@ -34,7 +34,7 @@ NAME = "table1"
 PAPER_SUCCESS = {"bottle_upright": "10/10", "bottle_horizontal": "10/10", "eclair": "10/10"}
 TRIALS = 30
 CREEP_TARGET = 10.0                 # um/s: the creep after the friction is found that a held grasp may show at most
-SLIDE_TARGET = 1.0                  # mm: the bound on a held object's slide over the hold; the grasp's slide
+SLIDE_TARGET = 1.0                  # mm: the held-still bound on a held object's slide over the hold; the grasp's slide
                                     # from the lift's start is counted against it too
 
 
