@@ -76,6 +76,8 @@ def grasp_rows(table, bench_rows: list[dict]) -> list[dict]:
                          grip_over_slip_limit=_value(row, "grip_over_slip_limit"),
                          grip_over_slip_limit_sd=_value(row, "grip_over_slip_limit_sd"),
                          grip_over_slip_limit_max=_value(row, "grip_over_slip_limit_max"),
+                         grasp_slide_median_mm=_value(row, "grasp_slide_median"),
+                         grasp_slide_max_mm=_value(row, "grasp_slide_max"),
                          friction_estimate_error=_value(row, "friction_estimate_error"),
                          detection_lead_time=_value(row, "detection_lead_time"),
                          translational_error_percent=None if translational is None else 100 * translational,

@@ -138,8 +138,10 @@ def _grasp_words(row) -> str:
     if pd.isna(row["grasp_success_rate"]):
         return ""
     ratio = "-" if pd.isna(row["grip_over_slip_limit"]) else f"{row['grip_over_slip_limit']:.2f}"
+    slide = "-" if pd.isna(row["grasp_slide_median"]) else f"{row['grasp_slide_median']:.2f} mm"
     return (f"; held {row['grasp_held']}/{row['grasp_trials']} (95 % {100 * row['grasp_success_low']:.0f}-"
-            f"{100 * row['grasp_success_high']:.0f} %), grip / slip limit {ratio}")
+            f"{100 * row['grasp_success_high']:.0f} %), grip / slip limit {ratio}, median slide from the lift's "
+            f"start {slide}")
 
 
 def _percent(value) -> str:

@@ -94,6 +94,8 @@ def test_the_sweep_has_typed_closed_loop_columns_that_add_up(grasp_sweep):
         assert row["grasp_success_rate"] == row["grasp_held"] / row["grasp_trials"]
         assert row["grasp_success_low"] <= row["grasp_success_rate"] <= row["grasp_success_high"]
         assert row["gross_slips_detected_before"] <= row["gross_slips"] <= row["grasp_trials"]
+        # every held object moves in the fingers from the lift's start at least by the gel's elastic shear
+        assert 0.0 < row["grasp_slide_median"] <= row["grasp_slide_max"]
         assert row["bench_wall"] > 0.0 and row["trials_wall"] > 0.0
     import pyarrow  # noqa: F401
 

@@ -14,8 +14,9 @@ For a ``FingertipDesign`` the closed loop (``DesignStudy.closed_loop``) runs, af
    shipped.
 
 Metrics (``GRASP_METRICS``): success rate (held) with its 95 % Wilson interval, outcomes, the settled grip over the
-trial's own slip limit, the friction estimate's error, and the detection lead time before gross slip; and the
-calibration's held-out errors against the design's FEM (``FIT_METRICS``).
+trial's own slip limit, the slide in the fingers from the lift's start, the friction estimate's error, and the
+detection lead time before gross slip; and the calibration's held-out errors against the design's FEM
+(``FIT_METRICS``).
 """
 
 from __future__ import annotations
@@ -48,6 +49,9 @@ GRASP_METRICS = {
     "grip_over_slip_limit_max": ("largest settled grip over slip limit, held trials", "-", None, "Float64"),
     "grip_over_slip_limit_sd": ("standard deviation (ddof 1) of the settled grip over slip limit over the held "
                                 "trials (two or more)", "-", None, "Float64"),
+    "grasp_slide_median": ("median over the held trials of the largest slide in the fingers from the lift's start "
+                           "(the gel's elastic shear and a slip caught in the lift)", "mm", "lower", "Float64"),
+    "grasp_slide_max": ("largest slide in the fingers from the lift's start, held trials", "mm", None, "Float64"),
     "friction_estimate_error": ("median |mu_hat / mu - 1| over the trials with a friction estimate", "-", "lower",
                                 "Float64"),
     "gross_slips": ("trials whose grasp slid as a whole (every bump of both fingertips sliding) in lift or hold",
@@ -162,7 +166,7 @@ def grasp_metrics(design, study, fitted) -> tuple[dict, dict]:
     estimator_bench(SensorPlane.FEM, model, array)             # the estimator's bench of this design (cached)
     timings = {"bench_wall": time.perf_counter() - tic}
     tic = time.perf_counter()
-    outcomes, ratios, errors, leads, gross = [], [], [], [], 0
+    outcomes, ratios, slides, errors, leads, gross = [], [], [], [], [], 0
     feasible = 0
     for obj, settings in _trial_jobs(study):
         plant = FingertipPlant(settings.plant, array, noise=settings.sensor_noise, seed=settings.seed,
@@ -174,6 +178,7 @@ def grasp_metrics(design, study, fitted) -> tuple[dict, dict]:
         feasible += int(required < obj.crush_force)
         if result.outcome == "held":
             ratios.append(result.hold_force_settled / required)
+            slides.append(result.grasp_slip_mm)
         if math.isfinite(result.friction_estimate):
             errors.append(abs(result.friction_estimate / settings.friction_coefficient - 1.0))
         lead = detection_lead_time(result, design.bumps)
@@ -191,6 +196,8 @@ def grasp_metrics(design, study, fitted) -> tuple[dict, dict]:
                "grip_over_slip_limit": float(np.mean(ratios)) if ratios else None,
                "grip_over_slip_limit_max": float(np.max(ratios)) if ratios else None,
                "grip_over_slip_limit_sd": float(np.std(ratios, ddof=1)) if len(ratios) > 1 else None,
+               "grasp_slide_median": float(np.median(slides)) if slides else None,
+               "grasp_slide_max": float(np.max(slides)) if slides else None,
                "friction_estimate_error": float(np.median(errors)) if errors else None,
                "gross_slips": gross, "gross_slips_detected_before": int(sum(lead > 0.0 for lead in leads)),
                "detection_lead_time": float(np.median(leads)) if leads else None}
