@@ -238,3 +238,16 @@ def test_parameters_round_trip_through_json():
 def test_invalid_design_raises(field, value, match):
     with pytest.raises(ValueError, match=match):
         ArrayFingertipDesign(**{field: value})
+
+
+def test_a_design_counted_in_numpy_integers_is_stored_as_python_ints():
+    # a sweep's grid hands numpy integers; the design's record is JSON
+    design = ArrayFingertipDesign(rows=np.int64(3), cols=np.int32(4))
+    assert type(design.rows) is int and type(design.cols) is int
+    assert json.loads(json.dumps(dataclasses.asdict(design)))["cols"] == 4
+
+
+@pytest.mark.parametrize("anisotropy", [1.0, -1.5, math.nan])
+def test_the_slip_limit_refuses_an_anisotropy_outside_the_open_unit_interval(anisotropy):
+    with pytest.raises(ValueError, match=r"anisotropy=.* outside allowed range \(-1.0, 1.0\)"):
+        TIP.minimum_normal_force((0.0, 0.5), 0.0, MU, anisotropy=anisotropy)

@@ -89,7 +89,8 @@ class ArrayFingertipDesign:
 
     def __post_init__(self):
         for name in ("rows", "cols"):
-            check_integer(name, getattr(self, name), 1, 12)
+            # kept as a Python int: a numpy integer would not survive asdict + json.dumps (the design's record)
+            object.__setattr__(self, name, check_integer(name, getattr(self, name), 1, 12))
         check_positive("bump_radius", self.bump_radius, "mm")
         check_range("pitch", self.pitch, 2.0 * self.bump_radius, math.inf, "mm (pitch > 2 bump_radius)", True, True)
         check_positive("base_thickness", self.base_thickness, "mm")

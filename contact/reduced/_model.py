@@ -35,7 +35,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from contact.theory import LUBKIN_SLIP_TORQUE_RATIO
-from fem.validation import check_finite_array, check_positive
+from fem.validation import check_finite_array, check_positive, check_range
 
 from ._base import BaseGrid, BaseKernel, base_grid
 from ._bumps import BumpResponse, bump_response, normal_split
@@ -246,6 +246,8 @@ class ReducedFingertip:
         """
         from scipy.optimize import minimize
 
+        # |e| < 1: at 1 the ellipse's minor axis, and the friction along it, vanishes
+        check_range("anisotropy", anisotropy, -1.0, 1.0, low_open=True, high_open=True)
         load = np.append(np.asarray(tangential_force, dtype=float), float(torque))
         scale = np.array([1.0, 1.0, 1.0 / self.length])                              # omega L on the sphere
         if not np.any(load):
@@ -278,6 +280,8 @@ class ReducedFingertip:
         """Least total normal force P [N] at which the load is carried (lambda* = 1), to a relative ``tolerance``;
         ``anisotropy`` as in ``support``."""
         from scipy.optimize import brentq
+
+        check_range("anisotropy", anisotropy, -1.0, 1.0, low_open=True, high_open=True)
 
         def margin(force):
             bump_force = normal_split(force, self.centres, self.parameters, tilt)
