@@ -281,8 +281,6 @@ class ReducedFingertip:
         ``anisotropy`` as in ``support``."""
         from scipy.optimize import brentq
 
-        check_range("anisotropy", anisotropy, -1.0, 1.0, low_open=True, high_open=True)
-
         def margin(force):
             bump_force = normal_split(force, self.centres, self.parameters, tilt)
             radius = self.parameters.radius_coefficient * np.cbrt(bump_force)

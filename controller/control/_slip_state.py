@@ -51,21 +51,25 @@ def _first_max(a, b):
 
 
 @njit_cached(inline="always")
-def _force_scale(scalars):
-    """The force loop's scale over the sensed force [-]: the command against the sensed force over a second (the
-    estimator's scale error; a lag of the grip behind its command averages out), within 0.5-2."""
-    scale = scalars[X_COMMAND_MEAN] / scalars[X_SENSED_MEAN] if scalars[X_SENSED_MEAN] > 0.0 else 1.0
+def _scale_against(scalars, sensed_mean):
+    """The force loop's scale over a sensed force [-]: the command's mean over a second against ``sensed_mean`` [N],
+    that force's mean over the same time (1 without one), within 0.5-2."""
+    scale = scalars[X_COMMAND_MEAN] / sensed_mean if sensed_mean > 0.0 else 1.0
     return _first_min(_first_max(scale, 0.5), 2.0)
 
 
 @njit_cached(inline="always")
+def _force_scale(scalars):
+    """The force loop's scale over the more used fingertip's sensed force [-] (the estimator's scale error; a lag of
+    the grip behind its command averages out)."""
+    return _scale_against(scalars, scalars[X_SENSED_MEAN])
+
+
+@njit_cached(inline="always")
 def _tip_grip(scalars, tip):
-    """The grip [N] read off fingertip ``tip`` alone: its slowly filtered sensed normal force in the force loop's
-    scale, by its own scale factor (the command's mean over a second against this fingertip's sensed force's; the
-    latter averaged over the frames it touches, from its first), within 0.5-2."""
-    mean = scalars[X_TIP_MEAN_0 + tip]
-    scale = scalars[X_COMMAND_MEAN] / mean if mean > 0.0 else 1.0
-    return scalars[X_TIP_SLOW_0 + tip] * _first_min(_first_max(scale, 0.5), 2.0)
+    """The grip [N] read off fingertip ``tip`` alone: its slowly filtered sensed normal force by its own scale (its
+    sensed force averaged over the frames it touches, from its first)."""
+    return scalars[X_TIP_SLOW_0 + tip] * _scale_against(scalars, scalars[X_TIP_MEAN_0 + tip])
 
 
 @njit_cached(inline="always")
